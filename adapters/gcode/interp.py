@@ -1,0 +1,629 @@
+"""Words -> ToolPath: modal state and moves, vectorised over lines.
+
+Modal values (motion mode, plane, units, distance mode, feed, path mode...)
+are forward-filled over the lines that carry words; positions are a
+segmented cumulative sum (absolute words reset it, incremental words add).
+Nothing loops over moves in Python.
+"""
+
+from __future__ import annotations
+
+from collections import defaultdict
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adapters.gcode import words as W
+from adapters.gcode.lexer import Source, Words
+from core import geometry as g
+from core.errors import InputError, Notice
+from core.tolerances import TOL
+from core.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
+
+INCH = 25.4
+AXIS_LETTERS = "XYZ"
+CENTRE_LETTERS = "IJK"
+ALLOWED = set("GMXYZIJKRFPQNSTHDO")
+EXTRA_AXES = set("ABCUVW")
+
+
+class Notes:
+    """Collects warnings: one notice per message, with its first line and a count."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self._first: dict[str, int | None] = {}
+        self._count: dict[str, int] = defaultdict(int)
+
+    def add(self, message: str, line: int | None = None, count: int = 1) -> None:
+        """``line`` is 0-based (or None for the whole file)."""
+        if message not in self._first:
+            self._first[message] = None if line is None else line + 1
+        self._count[message] += count
+
+    def notices(self) -> tuple[Notice, ...]:
+        return tuple(Notice(self.source, ln, msg, self._count[msg])
+                     for msg, ln in self._first.items())
+
+
+def detect_dialect(path: str, words: Words) -> str:
+    """Dialect from the extension, else from what the program uses."""
+    ext = Path(path).suffix.lower()
+    if ext == ".ngc":
+        return "linuxcnc"
+    if ext in (".mpf", ".spf"):
+        return "siemens"
+    if words.keywords:
+        return "siemens"
+    g_codes = np.unique(np.rint(words.value[words.letter == ord("G")] * 10).astype(np.int64))
+    if np.isin(g_codes, [600, 6410, 6420, 6430, 6440, 6450, 7000, 7100, 5000]).any():
+        return "siemens"
+    if np.isin(g_codes, [901, 911, 611]).any():
+        return "linuxcnc"
+    g64_lines = words.line[(words.letter == ord("G")) & (np.rint(words.value * 10) == 640)]
+    p_lines = words.line[words.letter == ord("P")]
+    if np.isin(g64_lines, p_lines).any():
+        return "linuxcnc"
+    return "fanuc"
+
+
+def _ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> NDArray:
+    """Forward-fill ``values`` from the positions where ``is_set``; ``initial`` before the first."""
+    idx = np.where(is_set, np.arange(values.size), -1)
+    np.maximum.accumulate(idx, out=idx)
+    out = values[np.maximum(idx, 0)]
+    return np.where(idx >= 0, out, initial)
+
+
+class Interpreter:
+    """Turns the words of one program into a ToolPath (see module docstring)."""
+
+    def __init__(self, src: Source, words: Words, dialect: str, block_delete: bool) -> None:
+        self.src = src
+        self.w = words
+        self.dialect = dialect
+        self.block_delete = block_delete
+        self.notes = Notes(src.name)
+
+    # ------------------------------------------------------------------ helpers
+    def error(self, line: int, message: str) -> Exception:
+        return self.src.error(int(line), message)
+
+    def _drop(self, keep: NDArray[np.bool_]) -> None:
+        w = self.w
+        w.line, w.letter, w.value, w.bare = w.line[keep], w.letter[keep], w.value[keep], w.bare[keep]
+
+    def _single(self, ch: str) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+        """Per active line: the value of letter ``ch`` (NaN if absent); error if twice."""
+        idx = np.flatnonzero(self.w.letter == ord(ch))
+        if idx.size == 0:
+            return np.full(self.na, np.nan), np.zeros(self.na, dtype=bool)
+        li = self.li[idx]
+        if li.size > 1:
+            dup = np.flatnonzero(li[1:] == li[:-1])
+            if dup.size:
+                raise self.error(self.w.line[idx[dup[0]]], f"two {ch} words in one block")
+        vals = np.full(self.na, np.nan)
+        vals[li] = self.w.value[idx]
+        present = np.zeros(self.na, dtype=bool)
+        present[li] = True
+        return vals, present
+
+    # ------------------------------------------------------------------ run
+    def run(self) -> ToolPath:
+        w = self.w
+        self._prefilter()
+        if w.line.size == 0:
+            raise _no_moves(self.src)
+        self.al, self.li = np.unique(w.line, return_inverse=True)
+        self.na = self.al.size
+        self._gcodes()
+        self._mcodes()
+        self._modal()
+        self._axes()
+        self._check_words()
+        return self._build()
+
+    def _prefilter(self) -> None:
+        """Non-finite numbers, block delete, end of program, letters ncperf does not read."""
+        w, src = self.w, self.src
+        bad = ~np.isfinite(w.value)
+        if bad.any():
+            raise self.error(w.line[np.argmax(bad)], "number out of range")
+        if w.block_delete:
+            lines = np.array(sorted(w.block_delete), dtype=np.int64)
+            if self.block_delete:
+                self._drop(~np.isin(w.line, lines))
+                self.notes.add("block-delete lines skipped (block delete on)", int(lines[0]),
+                               lines.size)
+            else:
+                self.notes.add("block-delete lines executed (block delete off; "
+                               "--block-delete skips them)", int(lines[0]), lines.size)
+        is_m = w.letter == ord("M")
+        mval = w.value[is_m]
+        frac = mval != np.rint(mval)
+        if frac.any():
+            raise self.error(w.line[np.flatnonzero(is_m)[np.argmax(frac)]],
+                             f"M{mval[np.argmax(frac)]:g} is not an M-code ncperf knows")
+        ends = w.line[is_m][np.isin(mval, list(W.M_END))]
+        if ends.size:
+            e = int(ends.min())
+            after = w.line > e
+            motion = after & np.isin(w.letter, [ord(c) for c in "GXYZ"])
+            if motion.any():
+                self.notes.add("words after the end of program (M2/M30) ignored",
+                               int(w.line[np.argmax(motion)]))
+            self._drop(~after)
+        letters = np.unique(w.letter)
+        for code in letters:
+            ch = chr(code)
+            if ch in ALLOWED:
+                continue
+            first = w.line[np.argmax(w.letter == code)]
+            if ch in EXTRA_AXES:
+                raise self.error(first, f"axis word {ch}: only X, Y and Z are supported "
+                                 "(3-axis G-code)")
+            if ch == "L":
+                raise self.error(first, "L word (repeat count or subprogram call) is not "
+                                 "supported")
+            raise src.error(int(first), f"unknown word {ch}")
+        if w.keywords:
+            for line, kw in w.keywords:
+                note = W.PASS_KEYWORDS.get(kw, "")
+                if note:
+                    self.notes.add(f"{kw}: {note}", line)
+
+    def _gcodes(self) -> None:
+        w = self.w
+        table = W.TABLES[self.dialect]
+        gi = np.flatnonzero(w.letter == ord("G"))
+        v = w.value[gi]
+        code = np.rint(v * 10).astype(np.int64)
+        group = np.full(gi.size, -1, dtype=np.int64)
+        for c in np.unique(code):
+            sel = code == c
+            first = w.line[gi[np.argmax(sel)]]
+            entry = table.get(int(c))
+            if entry is None:
+                raise self.error(first, f"unknown G-code G{c / 10:g} ({self.dialect} dialect)")
+            if entry.group is None:
+                raise self.error(first, entry.message)
+            if entry.message:
+                self.notes.add(entry.message, first)
+            group[sel] = entry.group
+        exact = np.abs(v * 10 - code) < 1e-6
+        if not exact.all():
+            k = np.argmin(exact)
+            raise self.error(w.line[gi[k]], f"unknown G-code G{v[k]:g}")
+        li = self.li[gi]
+        modal = group != W.Group.PASS
+        key = li[modal] * W.N_GROUPS + group[modal]
+        order = np.argsort(key, kind="stable")
+        ks = key[order]
+        dup = np.flatnonzero(ks[1:] == ks[:-1])
+        if dup.size:
+            k = gi[modal][order][dup[0] + 1]
+            raise self.error(w.line[k], "two G-codes of the same modal group in one block")
+        self.g = np.full((W.N_GROUPS, self.na), -1, dtype=np.int64)
+        self.g[group[modal], li[modal]] = code[modal]
+        # Codes that only pass: remembered per line for the P/Q checks.
+        self.g_pass_line = np.zeros(self.na, dtype=bool)
+        self.g_pass_line[li[~modal]] = True
+
+    def _mcodes(self) -> None:
+        w = self.w
+        mi = np.flatnonzero(w.letter == ord("M"))
+        m = np.rint(w.value[mi]).astype(np.int64)
+        for c, msg in W.M_ERRORS.items():
+            hit = m == c
+            if hit.any():
+                raise self.error(w.line[mi[np.argmax(hit)]], msg)
+        li = self.li[mi]
+        self.has_m = np.zeros(self.na, dtype=bool)
+        self.has_m[li] = True
+        self.m_stop = np.zeros(self.na, dtype=bool)
+        self.m_stop[li[np.isin(m, list(W.M_STOP))]] = True
+        self.m_tool = np.zeros(self.na, dtype=bool)
+        self.m_tool[li[m == W.M_TOOL_CHANGE]] = True
+
+    def _modal(self) -> None:
+        G = W.Group
+        gg = self.g
+        na = self.na
+
+        def fill(group: W.Group, initial: int) -> NDArray[np.int64]:
+            row = gg[group]
+            return _ffill(row, row >= 0, initial)
+
+        self.motion = fill(G.MOTION, -1)
+        self.plane = fill(G.PLANE, 170)
+        self.distance = fill(G.DISTANCE, 900)
+        self.arc_distance = fill(G.ARC_DISTANCE, 911)
+        units_set = gg[G.UNITS] >= 0
+        if not units_set.any():
+            self.notes.add("no G20/G21 (or G70/G71): millimetres assumed")
+        self.units = fill(G.UNITS, 210)
+        fm = gg[G.FEED_MODE]
+        for code, name in ((930, "G93 inverse-time feed"), (950, "G95 feed per revolution")):
+            hit = fm == code
+            if hit.any():
+                raise self.error(self.al[np.argmax(hit)], f"{name} is not supported")
+        self.path_mode = fill(G.PATH_MODE, 640)
+        if self.dialect == "siemens" and not (gg[G.PATH_MODE] >= 0).any():
+            self.notes.add("no G64/G641..G645: continuous path assumed (an 840D's default "
+                           "may be exact stop G60)")
+        wcs_row = gg[G.WORK_OFFSET]
+        wcs_set = np.flatnonzero(wcs_row >= 0)
+        if wcs_set.size:
+            codes = wcs_row[wcs_set]
+            change = np.flatnonzero(codes[1:] != codes[:-1])
+            if change.size:
+                k = wcs_set[change[0] + 1]
+                self.notes.add(
+                    f"work offset changes to G{codes[change[0] + 1] / 10:g}: the offsets are "
+                    "unknown, so moves before and after are not placed relative to each other",
+                    int(self.al[k]))
+        geom_inch = np.zeros(na, dtype=bool)
+        feed_inch = np.zeros(na, dtype=bool)
+        for code, (gi, fi) in W.UNITS.items():
+            sel = self.units == code
+            geom_inch[sel] = gi
+            feed_inch[sel] = fi
+        if self.dialect == "siemens" and (gg[G.UNITS] == 700).any():
+            self.notes.add("G70: feeds taken in mm/min (the basic system is assumed metric)",
+                           int(self.al[np.argmax(gg[G.UNITS] == 700)]))
+        self.scale = np.where(geom_inch, INCH, 1.0)
+        self.feed_scale = np.where(feed_inch, INCH, 1.0) / 60.0  # -> mm/s
+        self.any_inch = bool(geom_inch.any())
+
+    def _axes(self) -> None:
+        """Positions, moves, dwells."""
+        G = W.Group
+        gg = self.g
+        al = self.al
+        vals = {}
+        pres = {}
+        for ch in "XYZIJKRFPQNT":
+            vals[ch], pres[ch] = self._single(ch)
+        self.vals, self.pres = vals, pres
+
+        dwell_line = gg[G.DWELL] >= 0
+        self.dwell_time = np.zeros(self.na)
+        self.consumed = {ch: np.zeros(self.na, dtype=bool) for ch in "XPF"}
+        if dwell_line.any():
+            self._dwells(dwell_line)
+        home = gg[G.HOME] >= 0
+        machine = gg[G.MACHINE_COORDS] >= 0
+
+        given = {}
+        for ch in AXIS_LETTERS:
+            gvn = pres[ch].copy()
+            if ch == "X":
+                gvn &= ~self.consumed["X"]
+            given[ch] = gvn
+        has_axis = given["X"] | given["Y"] | given["Z"]
+        motion = self.motion
+        explicit_arc = np.isin(gg[G.MOTION], [W.MOTION_CW, W.MOTION_CCW])
+        centre_words = pres["I"] | pres["J"] | pres["K"]
+        full_circle = explicit_arc & ~has_axis & centre_words
+        no_mode = has_axis & ~home & ((motion < 0) | (motion == W.MOTION_NONE))
+        if no_mode.any():
+            raise self.error(al[np.argmax(no_mode)],
+                             "axis words without a motion mode (G0, G1, G2 or G3)")
+        if (machine & has_axis & (motion != W.MOTION_RAPID) & ~home).any():
+            k = np.argmax(machine & has_axis & (motion != W.MOTION_RAPID))
+            raise self.error(al[k], "G53 with a feed move: machine coordinates are unknown")
+        if (home & has_axis).any():
+            self.notes.add("G28/G30: the move to the machine's home position is not modelled "
+                           "(home is unknown); the path continues from the intermediate point",
+                           int(al[np.argmax(home)]))
+        if (machine & has_axis).any():
+            self.notes.add("G53 machine coordinates taken as work coordinates (the offset is "
+                           "unknown); only rapids are affected", int(al[np.argmax(machine)]))
+        is_move = has_axis | full_circle
+        self.is_move = is_move
+        self.home = home
+
+        # Positions: a segmented cumulative sum per axis.
+        absolute = (self.distance == 900) | machine
+        pos = np.zeros((self.na, 3))
+        known = np.zeros((self.na, 3), dtype=bool)
+        for k, ch in enumerate(AXIS_LETTERS):
+            gvn = given[ch]
+            mm = np.where(gvn, vals[ch], 0.0) * self.scale
+            abs_set = gvn & absolute
+            inc = np.where(gvn & ~absolute, mm, 0.0)
+            csum = np.cumsum(inc)
+            last = np.where(abs_set, np.arange(self.na), -1)
+            np.maximum.accumulate(last, out=last)
+            base = np.where(last >= 0, mm[np.maximum(last, 0)] - csum[np.maximum(last, 0)], 0.0)
+            pos[:, k] = base + csum
+            known[:, k] = np.maximum.accumulate(gvn)
+        self.pos = pos
+        self.known = known
+
+        # Motion kind per move line.
+        kind = np.full(self.na, -1, dtype=np.int64)
+        kind[motion == W.MOTION_RAPID] = MoveKind.RAPID
+        kind[motion == W.MOTION_LINE] = MoveKind.LINE
+        kind[motion == W.MOTION_CW] = MoveKind.ARC_CW
+        kind[motion == W.MOTION_CCW] = MoveKind.ARC_CCW
+        kind[home] = MoveKind.RAPID
+        self.kind = kind
+
+    def _dwells(self, dwell_line: NDArray[np.bool_]) -> None:
+        v, p = self.vals, self.pres
+        al = self.al
+        d = self.dialect
+        t = np.full(self.na, np.nan)
+        if d == "linuxcnc":
+            if (dwell_line & p["X"]).any():
+                raise self.error(al[np.argmax(dwell_line & p["X"])], "axis word on a G4 block")
+            t = np.where(p["P"], v["P"], np.nan)
+            self.consumed["P"] = dwell_line & p["P"]
+        elif d == "fanuc":
+            # Fanuc: G4 X (s) or G4 P (ms, no decimal point).
+            t = np.where(p["X"], v["X"], np.where(p["P"], v["P"] / 1000.0, np.nan))
+            self.consumed["X"] = dwell_line & p["X"]
+            self.consumed["P"] = dwell_line & p["P"]
+        else:  # siemens: G4 F (s); G4 S is in spindle revolutions
+            s_lines = self.w.line[self.w.letter == ord("S")]
+            if np.isin(al[dwell_line], s_lines).any():
+                k = np.flatnonzero(dwell_line)[np.isin(al[dwell_line], s_lines)][0]
+                raise self.error(al[k], "G4 S (dwell in spindle revolutions) is not supported")
+            t = np.where(p["F"], v["F"], np.nan)
+            self.consumed["F"] = dwell_line & p["F"]
+        missing = dwell_line & np.isnan(t)
+        if missing.any():
+            raise self.error(al[np.argmax(missing)], "G4 dwell without a time")
+        if (dwell_line & (t < 0)).any():
+            raise self.error(al[np.argmax(dwell_line & (t < 0))], "negative dwell time")
+        self.dwell_time = np.where(dwell_line, t, 0.0)
+
+    def _check_words(self) -> None:
+        """Words no code on their block uses: an error, never a silent misreading."""
+        G = W.Group
+        p, al, gg = self.pres, self.al, self.g
+        arc = self.is_move & np.isin(self.kind, [MoveKind.ARC_CW, MoveKind.ARC_CCW]) & ~self.home
+        self.arc = arc
+        for ch in "IJKR":
+            bad = p[ch] & ~arc
+            if bad.any():
+                raise self.error(al[np.argmax(bad)], f"{ch} word on a block that is not an arc")
+        g64 = gg[G.PATH_MODE] == 640
+        lc = self.dialect == "linuxcnc"
+        p_ok = self.consumed["P"] | self.has_m | self.g_pass_line | (gg[G.WORK_OFFSET] >= 0)
+        if lc:
+            p_ok |= g64 | arc
+        bad = p["P"] & ~p_ok
+        if bad.any():
+            raise self.error(al[np.argmax(bad)], "P word not used by any code in this block")
+        q_ok = self.has_m | self.g_pass_line | (g64 if lc else False)
+        bad = p["Q"] & ~q_ok
+        if bad.any():
+            raise self.error(al[np.argmax(bad)], "Q word not used by any code in this block")
+        merge = p["Q"] & g64 & (self.vals["Q"] > 0)
+        if lc and merge.any():
+            self.notes.add("G64 Q: LinuxCNC may merge collinear G1 blocks within Q; ncperf "
+                           "predicts every block", int(al[np.argmax(merge)]))
+        o = self.w.letter == ord("O")
+        if o.any():
+            lines_o = self.li[o]
+            others = np.isin(self.li, lines_o) & ~np.isin(self.w.letter, [ord("O"), ord("N")])
+            if others.any():
+                raise self.error(self.w.line[np.argmax(others)],
+                                 "O word with other words in the block (subprograms are not "
+                                 "supported; a program number stands alone)")
+
+    # ------------------------------------------------------------------ build
+    def _build(self) -> ToolPath:
+        al = self.al
+        mi = np.flatnonzero(self.is_move)
+        if mi.size == 0:
+            raise _no_moves(self.src)
+        n = mi.size
+        prev = np.concatenate([[np.zeros(3)], self.pos[:-1]])
+        start = prev[mi]
+        end = self.pos[mi]
+        kind = self.kind[mi]
+        cols = empty_columns(n)
+        cols["kind"] = kind.astype(np.int8)
+        cols["start"] = start
+        cols["end"] = end
+        cols["line"] = al[mi] + 1
+        n_vals, n_pres = self.vals["N"], self.pres["N"]
+        cols["block"] = np.where(n_pres[mi], n_vals[mi], -1).astype(np.int64)
+
+        # Unknown start: a feed move before every axis was set.
+        unknown = ~self.known[np.maximum(mi - 1, 0)]
+        unknown[mi == 0] = True
+        feedmove = kind != MoveKind.RAPID
+        bad = feedmove & unknown.any(axis=1)
+        if bad.any():
+            k = int(np.argmax(bad))
+            axes = "".join(a for a, u in zip(AXIS_LETTERS, unknown[k], strict=True) if u)
+            self.notes.add(f"feed move starts before {axes} was programmed: 0 assumed",
+                           int(al[mi[k]]))
+
+        # Feed (mm/s), modal.
+        fvals, fpres = self.vals["F"], self.pres["F"] & ~self.consumed["F"]
+        if (fpres & (fvals <= 0)).any():
+            raise self.error(al[np.argmax(fpres & (fvals <= 0))], "feed F must be positive")
+        feed_line = _ffill(fvals * self.feed_scale, fpres, np.nan)
+        feed = feed_line[mi]
+        nofeed = feedmove & np.isnan(feed)
+        if nofeed.any():
+            raise self.error(al[mi[np.argmax(nofeed)]], "feed move without a feed rate F")
+        cols["feed"] = np.where(feedmove, feed, np.nan)
+
+        self._arcs(cols, mi)
+
+        # Path mode: modal exact stop, G9 on the block, M0/M1 after the block.
+        exact_line = np.isin(self.path_mode, W.EXACT_STOP_CODES) | (self.g[W.Group.EXACT_STOP_BLOCK] >= 0)
+        mode = np.where(exact_line[mi], PathMode.EXACT_STOP, PathMode.CONTINUOUS).astype(np.int8)
+        stop_lines = np.flatnonzero(self.m_stop)
+        if stop_lines.size:
+            owner = np.searchsorted(mi, stop_lines, side="right") - 1
+            mode[owner[owner >= 0]] = PathMode.EXACT_STOP
+        cols["path_mode"] = mode
+
+        # Dwell after the last move before (or on) the G4 block.
+        dl = np.flatnonzero(self.dwell_time > 0)
+        if dl.size:
+            owner = np.searchsorted(mi, dl, side="right") - 1
+            dwell = np.zeros(n)
+            np.add.at(dwell, owner[owner >= 0], self.dwell_time[dl[owner >= 0]])
+            if (owner < 0).any():
+                self.notes.add("G4 before the first move ignored", int(al[dl[0]]))
+            cols["dwell"] = dwell
+
+        # Path tolerance from LinuxCNC G64 P.
+        if self.dialect == "linuxcnc":
+            pm = self.g[W.Group.PATH_MODE]
+            setl = pm >= 0
+            tol = np.where((pm == 640) & self.pres["P"], self.vals["P"] * self.scale, np.nan)
+            cols["tolerance"] = _ffill(tol, setl, np.nan)[mi]
+
+        # Tools and operations.
+        tvals, tpres = self.vals["T"], self.pres["T"]
+        t_sel = _ffill(tvals, tpres, -1)
+        if self.m_tool.any():
+            tool_line = _ffill(t_sel, self.m_tool, -1)
+            change = np.flatnonzero(self.m_tool)
+        else:
+            tool_line = t_sel
+            change = np.zeros(0, dtype=np.int64)
+        cols["tool"] = tool_line[mi].astype(np.int32)
+        first_move = np.searchsorted(mi, change, side="left")
+        offs = np.unique(np.concatenate([[0], first_move[first_move < n], [n]]))
+        names = []
+        for a in offs[:-1]:
+            t = int(cols["tool"][a])
+            names.append(f"T{t} from line {int(cols['line'][a])}" if t >= 0
+                         else f"from line {int(cols['line'][a])}")
+        cols["op_offsets"] = offs
+
+        if self.dialect == "fanuc":
+            self._decimal_point_notice()
+
+        tp = ToolPath(**cols, op_names=tuple(names), source=self.src.name,
+                      units="inch" if self.any_inch else "mm")
+        tp, removed = drop_zero_length(tp)
+        if removed.size:
+            self.notes.add("zero-length moves dropped", int(cols["line"][removed[0]] - 1),
+                           int(removed.size))
+        if tp.n == 0:
+            raise _no_moves(self.src)
+        return ToolPath(**{k: getattr(tp, k) for k in cols}, op_names=tp.op_names,
+                        source=tp.source, notices=self.notes.notices(), units=tp.units)
+
+    def _arcs(self, cols: dict, mi: NDArray[np.int64]) -> None:
+        arc_l = np.flatnonzero(self.arc[mi])
+        if arc_l.size == 0:
+            return
+        lines = mi[arc_l]
+        al = self.al[lines]
+        plane = self.plane[lines]
+        normal = np.array([W.PLANE_NORMAL[int(p)] for p in (170, 180, 190)])[
+            np.searchsorted([170, 180, 190], plane)]
+        s = cols["start"][arc_l]
+        e = cols["end"][arc_l]
+        ccw = self.kind[lines] == MoveKind.ARC_CCW
+        scale = self.scale[lines]
+        v, p = self.vals, self.pres
+        has_ijk = p["I"][lines] | p["J"][lines] | p["K"][lines]
+        has_r = p["R"][lines]
+        both = has_ijk & has_r
+        if both.any():
+            raise self.error(al[np.argmax(both)], "arc with both I/J/K and R")
+        neither = ~has_ijk & ~has_r
+        if neither.any():
+            raise self.error(al[np.argmax(neither)], "arc without I/J/K or R")
+        off = np.stack([np.nan_to_num(v[c][lines]) for c in CENTRE_LETTERS], axis=1)
+        off *= scale[:, None]
+        off_n = g.dot(off, normal)
+        bad = has_ijk & (np.abs(off_n) > TOL.zero_length)
+        if bad.any():
+            k = int(np.argmax(bad))
+            word = CENTRE_LETTERS[int(np.argmax(normal[k]))]
+            raise self.error(al[k], f"{word} word is not in the arc's plane "
+                             f"(G{int(plane[k]) // 10})")
+        off_in = off - off_n[:, None] * normal
+        absolute = self.arc_distance[lines] == 901
+        start_n = g.dot(s, normal)[:, None] * normal
+        centre = np.where(absolute[:, None], off_in + start_n, s + off_in)
+
+        r_idx = np.flatnonzero(has_r)
+        if r_idx.size:
+            centre[r_idx] = self._r_centres(s[r_idx], e[r_idx], normal[r_idx], ccw[r_idx],
+                                            v["R"][lines[r_idx]] * scale[r_idx], al[r_idx])
+        r0 = g.norm(g.radial(s, centre, normal))
+        r1 = g.norm(g.radial(e, centre, normal))
+        tiny = r0 < TOL.min_arc_radius
+        if tiny.any():
+            raise self.error(al[np.argmax(tiny)], "arc with zero radius")
+        mismatch = np.abs(r1 - r0)
+        off_circle = (mismatch > TOL.arc_end_abs) & (mismatch > TOL.arc_end_rel * r0)
+        if off_circle.any():
+            k = int(np.argmax(off_circle))
+            raise self.error(al[k], f"arc end point is {mismatch[k]:.4f} mm off the circle "
+                             f"(radius {r0[k]:.4f} mm from the start)")
+        turns = np.zeros(arc_l.size)
+        if self.dialect == "linuxcnc":
+            pt = p["P"][lines]
+            pv = v["P"][lines]
+            badp = pt & ((pv < 1) | (pv != np.rint(pv)))
+            if badp.any():
+                raise self.error(al[np.argmax(badp)], "P on an arc must be a positive integer "
+                                 "number of turns")
+            turns = np.where(pt, pv - 1, 0)
+        sweep = g.arc_sweep(s, e, centre, normal, ccw, turns)
+        cols["center"][arc_l] = centre
+        cols["normal"][arc_l] = normal
+        cols["sweep"][arc_l] = sweep
+
+    def _r_centres(self, s: NDArray, e: NDArray, normal: NDArray, ccw: NDArray,
+                   r: NDArray, lines: NDArray) -> NDArray:
+        """Centres of R-format arcs: R > 0 the short way, R < 0 the long way round."""
+        chord = e - s
+        chord = chord - g.dot(chord, normal)[:, None] * normal
+        length = g.norm(chord)
+        same = length <= TOL.zero_length
+        if same.any():
+            raise self.error(lines[np.argmax(same)],
+                             "R arc whose end point is its start point (use I/J/K for a circle)")
+        rad = np.abs(r)
+        if (rad < TOL.min_arc_radius).any():
+            raise self.error(lines[np.argmax(rad < TOL.min_arc_radius)], "arc with zero radius")
+        h2 = rad**2 - (length / 2) ** 2
+        short = h2 < 0
+        too_short = short & (length / 2 - rad > TOL.arc_radius)
+        if too_short.any():
+            k = int(np.argmax(too_short))
+            raise self.error(lines[k], f"R {r[k]:.4f} mm is less than half the chord "
+                             f"({length[k] / 2:.4f} mm)")
+        h = np.sqrt(np.maximum(h2, 0.0))
+        left = np.cross(normal, chord / length[:, None])
+        sign = np.where(ccw, 1.0, -1.0) * np.sign(r)
+        return s + chord / 2 + (sign * h)[:, None] * left
+
+    def _decimal_point_notice(self) -> None:
+        w = self.w
+        sel = w.bare
+        if sel.any():
+            k = int(np.argmax(sel))
+            self.notes.add(
+                f"{chr(w.letter[k])}{w.value[k]:g} has no decimal point: read as "
+                f"{w.value[k]:g} (calculator-type input); a Fanuc control without it reads "
+                "the least input increment (e.g. 0.001 mm)", int(w.line[k]), int(sel.sum()))
+
+
+def _no_moves(src: Source) -> InputError:
+    return InputError("no moves (G0, G1, G2, G3) in the program", source=src.name)
+
+
+def interpret(src: Source, words: Words, dialect: str | None, block_delete: bool) -> ToolPath:
+    """The ToolPath of a tokenised program."""
+    d = dialect or detect_dialect(src.name, words)
+    return Interpreter(src, words, d, block_delete).run()

@@ -1,0 +1,406 @@
+"""G-code text -> words (letter, number, line), vectorised over the whole file.
+
+Plain lines -- letters, numbers, spaces and balanced ``( )`` comments, the
+bulk of any CAM program -- are tokenised with numpy over the file's bytes.
+Lines with anything else (``;`` comments, ``%``, block delete ``/``,
+keywords, ``=``, ``#``, non-ASCII text...) are few; they go through a
+per-line Python tokeniser that knows the rare syntax and names the line in
+its errors. Both produce the same columns.
+"""
+
+from __future__ import annotations
+
+import re
+import warnings
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from adapters.gcode import words as W
+from core.errors import InputError
+
+#: A G-code line longer than this is not G-code (LinuxCNC stops at 256 characters,
+#: Fanuc at a few hundred); without the limit a 50 MB line would be echoed and parsed.
+MAX_LINE = 4096
+
+SPACE, TAB, CR, LF, VT, FF = 32, 9, 13, 10, 11, 12
+
+# Byte classes for the vectorised path.
+_PLAIN = np.zeros(256, dtype=bool)
+for _ch in b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789.+- \t\r()":
+    _PLAIN[_ch] = True
+_PLAIN[VT] = _PLAIN[FF] = True
+# Upper-case letters; whitespace to 0 (dropped), everything else unchanged.
+_CANON = np.arange(256, dtype=np.uint8)
+_CANON[ord("a"): ord("z") + 1] -= 32
+for _ch in (SPACE, TAB, CR, VT, FF):
+    _CANON[_ch] = 0
+_LETTER = np.zeros(256, dtype=bool)
+_LETTER[ord("A"): ord("Z") + 1] = True
+_NUMCHAR = np.zeros(256, dtype=bool)
+for _ch in b"0123456789.+-":
+    _NUMCHAR[_ch] = True
+
+
+@dataclass
+class Words:
+    """Words of a program, sorted by line.
+
+    Attributes
+    ----------
+    line : (w,) int64
+        0-based line index.
+    letter : (w,) uint8
+        ASCII code of the upper-case letter.
+    value : (w,) float64
+    bare : (w,) bool
+        A dimension word (X Y Z I J K R) with a nonzero integer written without a decimal
+        point: Fanuc controls may read X10 as 10 mm or as 10 least increments.
+    n_lines : int
+    block_delete : set of int
+        Lines starting with "/".
+    keywords : list of (line, keyword)
+        Siemens keywords seen (for notices and dialect detection).
+    """
+
+    line: NDArray[np.int64]
+    letter: NDArray[np.uint8]
+    value: NDArray[np.float64]
+    bare: NDArray[np.bool_]
+    n_lines: int
+    block_delete: set[int] = field(default_factory=set)
+    keywords: list[tuple[int, str]] = field(default_factory=list)
+    special_lines: int = 0
+
+
+class Source:
+    """The raw bytes and line offsets of a file, for error messages."""
+
+    def __init__(self, name: str, data: bytes) -> None:
+        self.name = name
+        self.data = data
+        buf = np.frombuffer(data, dtype=np.uint8)
+        self.buf = buf
+        self.nl = np.flatnonzero(buf == LF)
+        # Line i spans [starts[i], ends[i]) without its newline.
+        self.starts = np.concatenate([[0], self.nl + 1]).astype(np.int64)
+        self.ends = np.concatenate([self.nl, [buf.size]]).astype(np.int64)
+        if self.starts[-1] == buf.size and buf.size > 0:
+            # A final newline does not start another line.
+            self.starts, self.ends = self.starts[:-1], self.ends[:-1]
+        self.n_lines = int(self.starts.size)
+
+    def text(self, i: int) -> str:
+        """Line i (0-based) as text."""
+        return self.data[self.starts[i] : self.ends[i]].decode("utf-8", "replace").rstrip("\r")
+
+    def line_of(self, pos: int) -> int:
+        """0-based line of byte offset ``pos``."""
+        return int(np.searchsorted(self.nl, pos, side="left"))
+
+    def error(self, i: int, message: str, *, quote: bool = True) -> InputError:
+        return InputError(message, source=self.name, line=i + 1,
+                          text=self.text(i) if quote else None)
+
+
+# ----------------------------------------------------------------------- checks
+def check_bytes(src: Source) -> None:
+    """Empty, binary and absurdly long input: one-line errors naming the line."""
+    buf = src.buf
+    if buf.size == 0 or not np.any(buf > SPACE):
+        raise InputError("empty file: no G-code in it", source=src.name)
+    if b"\x00" in src.data:
+        raise src.error(src.line_of(src.data.index(b"\x00")),
+                        "binary file (NUL byte); not a G-code program", quote=False)
+    lengths = src.ends - src.starts
+    long_ = np.flatnonzero(lengths > MAX_LINE)
+    if long_.size:
+        i = int(long_[0])
+        raise src.error(i, f"line is {int(lengths[i])} characters long (limit {MAX_LINE}); "
+                        "not a G-code program", quote=False)
+
+
+# ----------------------------------------------------------------------- vectorised path
+def _special_lines_from_bytes(src: Source) -> NDArray[np.bool_]:
+    """Lines the vectorised path cannot take: unusual bytes or unbalanced/nested parentheses."""
+    buf = src.buf
+    special = np.zeros(src.n_lines, dtype=bool)
+    odd = np.flatnonzero(~_PLAIN[buf] & (buf != LF))
+    if odd.size:
+        special[np.unique(np.searchsorted(src.nl, odd, side="left"))] = True
+    return special
+
+
+def _comment_mask(src: Source, special: NDArray[np.bool_]) -> NDArray[np.bool_] | None:
+    """Bytes inside ( ) comments on plain lines; marks lines with bad parentheses special."""
+    buf = src.buf
+    opens = buf == ord("(")
+    closes = buf == ord(")")
+    paren_pos = np.flatnonzero(opens | closes)
+    if paren_pos.size == 0:
+        return None
+    delta = opens.astype(np.int8) - closes.astype(np.int8)
+    paren_line = np.searchsorted(src.nl, paren_pos, side="left")
+    # Lines whose parentheses do not balance go to the per-line path.
+    net = np.bincount(paren_line, weights=delta[paren_pos], minlength=src.n_lines)
+    special |= net != 0
+    delta[paren_pos[special[paren_line]]] = 0
+    # Now every remaining line starts at depth 0, so depth is the depth within the line.
+    depth = np.cumsum(delta, dtype=np.int32)
+    d = depth[paren_pos]
+    # Nested "((" or a ")" before its "(": the depth leaves {0, 1}.
+    bad = ((d > 1) | (d < 0)) & ~special[paren_line]
+    if bad.any():
+        special[np.unique(paren_line[bad])] = True
+        delta[paren_pos[special[paren_line]]] = 0
+        depth = np.cumsum(delta, dtype=np.int32)
+    return (depth > 0) | closes
+
+
+def _line_ranges(lfpos: NDArray[np.int64], size: int, lines: NDArray[np.int64]
+                 ) -> list[tuple[int, int]]:
+    """[start, end) of the given lines in a buffer whose newlines are at ``lfpos``."""
+    out = []
+    for k in lines:
+        a = int(lfpos[k - 1]) + 1 if k > 0 else 0
+        b = int(lfpos[k]) if k < lfpos.size else size
+        out.append((a, b))
+    return out
+
+
+def tokenize(src: Source) -> Words:
+    """All words of the program (see module docstring)."""
+    check_bytes(src)
+    special = _special_lines_from_bytes(src)
+    comments = _comment_mask(src, special)
+
+    buf = _CANON[src.buf]  # upper case, whitespace 0; a fresh array
+    if comments is not None:
+        buf[comments] = 0
+    for a, b in zip(src.starts[special], src.ends[special], strict=True):
+        buf[a:b] = 0
+    c = buf[buf != 0]
+    del buf
+
+    is_letter = _LETTER[c]
+    is_lf = c == LF
+    brk_mask = is_letter | is_lf
+    brk = np.flatnonzero(brk_mask)
+    lf_at = is_lf[brk]
+    line_at_brk = np.cumsum(lf_at) - lf_at  # newlines before each break = its line
+    lfpos = brk[lf_at]
+    rank = np.flatnonzero(~lf_at)
+    lpos = brk[rank]
+    span_end = np.append(brk, c.size)[rank + 1]
+    wline = line_at_brk[rank].astype(np.int64)
+    empty = span_end == lpos + 1
+
+    # Lines the plain path cannot read: a letter with no number (a keyword such as
+    # Siemens SOFT, or "X" alone), or number characters before the line's first letter.
+    bad = set(np.unique(wline[empty]).tolist())
+    orphan = np.flatnonzero(~brk_mask[1:] & is_lf[:-1]) + 1
+    if c.size and not brk_mask[0]:
+        orphan = np.concatenate([[0], orphan])
+    if orphan.size:
+        bad.update(np.searchsorted(lfpos, orphan, side="left").tolist())
+
+    sep = np.where(brk_mask, np.uint8(SPACE), c)
+    values = np.full(lpos.size, np.nan)
+    for attempt in range(2):
+        bad_arr = np.array(sorted(bad), dtype=np.int64)
+        for a, b in _line_ranges(lfpos, c.size, bad_arr):
+            sep[a:b] = SPACE
+        want = ~empty & ~np.isin(wline, bad_arr)
+        vals = _fromstring(sep)
+        if vals is not None and vals.size == np.count_nonzero(want):
+            values[want] = vals
+            break
+        if attempt:  # pragma: no cover - the validation below finds every bad span
+            raise AssertionError("G-code lexer: numbers could not be aligned with words")
+        bad.update(np.unique(wline[want & ~_well_formed(c, lpos + 1, span_end)]).tolist())
+    ok = want
+    if bad:
+        special[np.array(sorted(bad), dtype=np.int64)] = True
+
+    line, letter, value = wline[ok], c[lpos[ok]], values[ok]
+    bare = _bare_integers(c, lpos[ok] + 1, span_end[ok], letter, value)
+
+    result = Words(line=line, letter=letter, value=value, bare=bare, n_lines=src.n_lines)
+    sp = np.flatnonzero(special)
+    result.special_lines = int(sp.size)
+    rows = [r for i in sp for r in tokenize_line(src, int(i), result)]
+    if rows:
+        line = np.concatenate([line, np.array([r[0] for r in rows], dtype=np.int64)])
+        letter = np.concatenate([letter, np.array([r[1] for r in rows], dtype=np.uint8)])
+        value = np.concatenate([value, np.array([r[2] for r in rows], dtype=np.float64)])
+        bare = np.concatenate([bare, np.array([r[3] for r in rows], dtype=bool)])
+        order = np.argsort(line, kind="stable")
+        result.line, result.letter = line[order], letter[order]
+        result.value, result.bare = value[order], bare[order]
+    return result
+
+
+def _fromstring(sep: NDArray[np.uint8]) -> NDArray[np.float64] | None:
+    """Parse space-separated numbers in C; None if some text is not a number."""
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        try:
+            return np.fromstring(sep.tobytes(), dtype=np.float64, sep=" ")
+        except (DeprecationWarning, ValueError):
+            return None
+
+
+def _well_formed(c: NDArray[np.uint8], s: NDArray[np.int64], e: NDArray[np.int64]
+                 ) -> NDArray[np.bool_]:
+    """Spans ``c[s:e]`` of the form [+-]digits[.digits] or [+-].digits (error path only)."""
+    def count(mask: NDArray[np.bool_]) -> NDArray[np.int64]:
+        cs = np.concatenate([[0], np.cumsum(mask, dtype=np.int64)])
+        return cs[e] - cs[s]
+
+    n_dot = count(c == ord("."))
+    is_sign = (c == ord("+")) | (c == ord("-"))
+    n_sign = count(is_sign)
+    n_digit = count((c >= ord("0")) & (c <= ord("9")))
+    first_sign = is_sign[np.minimum(s, c.size - 1)]
+    return (n_digit + n_dot + n_sign == e - s) & (n_dot <= 1) & (n_sign == first_sign) & (
+        n_digit >= 1)
+
+
+_DIMENSION = np.zeros(256, dtype=bool)
+for _ch in b"XYZIJKR":
+    _DIMENSION[_ch] = True
+
+
+def _bare_integers(c: NDArray[np.uint8], s: NDArray[np.int64], e: NDArray[np.int64],
+                   letter: NDArray[np.uint8], value: NDArray[np.float64]) -> NDArray[np.bool_]:
+    """Dimension words with a nonzero integer value and no decimal point (see Words.bare)."""
+    bare = np.zeros(s.size, dtype=bool)
+    cand = np.flatnonzero(_DIMENSION[letter] & (value == np.round(value)) & (value != 0))
+    if cand.size:
+        lens = e[cand] - s[cand]
+        owner = np.repeat(np.arange(cand.size), lens)
+        offs = np.arange(owner.size) - np.repeat(np.cumsum(lens) - lens, lens)
+        isdot = c[s[cand][owner] + offs] == ord(".")
+        bare[cand] = np.bincount(owner, weights=isdot, minlength=cand.size) == 0
+    return bare
+
+
+# ----------------------------------------------------------------------- per-line path
+_TOKEN = re.compile(
+    r"""\s*(?:
+      (?P<assign>[A-Z_$][A-Z0-9_$]*)\s*=\s*(?P<rhs>[^\s]*)
+    | (?P<kw>[A-Z_$]{2,}[A-Z0-9_]*)(?P<args>\([^)]*\))?
+    | (?P<letter>[A-Z])\s*(?P<num>[-+]?(?:\d+\.?\d*|\.\d+))(?![\d.])
+    | (?P<colon>:)\s*(?P<cnum>\d+)
+    | (?P<bad>\S+)
+    )""",
+    re.VERBOSE,
+)
+_NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)$")
+
+
+def _strip_comments(src: Source, i: int, text: str) -> str:
+    """Remove ( ) and ; comments from one line; errors for unclosed or nested ( )."""
+    out = []
+    depth = 0
+    for ch in text:
+        if depth == 0:
+            if ch == ";":
+                break
+            if ch == "(":
+                depth = 1
+                out.append(" ")
+            elif ch == ")":
+                raise src.error(i, "')' without '('")
+            else:
+                out.append(ch)
+        else:
+            if ch == "(":
+                raise src.error(i, "nested comment '(' inside '( )'")
+            if ch == ")":
+                depth = 0
+            out.append(" ")
+    if depth:
+        raise src.error(i, "comment '(' is not closed on its line")
+    return "".join(out)
+
+
+def tokenize_line(src: Source, i: int, words: Words) -> list[tuple[int, int, float, bool]]:
+    """Words of one unusual line (0-based ``i``), with its own errors."""
+    raw = src.text(i)
+    text = _strip_comments(src, i, raw)
+    stripped = text.strip()
+    if not stripped:
+        return []
+    if stripped.startswith("%"):
+        if stripped.strip("%").strip():
+            raise src.error(i, "text after '%' (program start/end marker)")
+        return []
+    if stripped.startswith("/"):
+        words.block_delete.add(i)
+        stripped = stripped[1:]
+        if stripped[:1].isdigit():  # Fanuc "/2": block-delete switch number
+            stripped = stripped[1:]
+    try:
+        stripped.encode("ascii")
+    except UnicodeEncodeError:
+        bad = next(ch for ch in stripped if ord(ch) > 127)
+        raise src.error(i, f"non-ASCII character {bad!r} outside a comment") from None
+    ctrl = [ch for ch in stripped if ord(ch) < 32 and ch not in "\t\r\x0b\x0c"]
+    if ctrl:
+        raise src.error(i, f"control character 0x{ord(ctrl[0]):02x}; not a G-code program",
+                        quote=False)
+    up = stripped.upper()
+    if "#" in up or "[" in up or "]" in up:
+        raise src.error(i, "macro variables and expressions (#, [ ]) are not supported")
+    rows: list[tuple[int, int, float, bool]] = []
+    for m in _TOKEN.finditer(up):
+        if m.group("letter"):
+            num = m.group("num").replace(" ", "")
+            letter, value = m.group("letter"), float(num)
+            bare = letter in "XYZIJKR" and "." not in num and value != 0
+            rows.append((i, ord(letter), value, bare))
+        elif m.group("kw"):
+            kw = m.group("kw")
+            _keyword(src, i, kw, words)
+        elif m.group("assign"):
+            name, rhs = m.group("assign"), m.group("rhs")
+            if name == "CR":  # Siemens radius of a circle: the same as R
+                if not _NUMBER.match(rhs):
+                    raise src.error(i, f"CR={rhs} is not a number")
+                rows.append((i, ord("R"), float(rhs), False))
+                words.keywords.append((i, "CR="))
+            elif name in W.PASS_ASSIGNMENTS:
+                words.keywords.append((i, name + "="))
+            else:
+                raise src.error(
+                    i, f"assignment {name}={rhs} (parameters, IC()/AC(), system variables) "
+                    "is not supported")
+        elif m.group("colon"):
+            rows.append((i, ord("N"), float(m.group("cnum")), False))
+        elif m.group("bad"):
+            tok = m.group("bad")
+            if tok[0] == "/":
+                raise src.error(i, "'/' inside a block (block delete must start the line)")
+            if tok[0].isalpha():
+                raise src.error(i, f"word '{tok[0]}' has no number")
+            raise src.error(i, f"malformed number or word '{tok}'")
+    return rows
+
+
+def _keyword(src: Source, i: int, kw: str, words: Words) -> None:
+    if kw in W.PASS_KEYWORDS:
+        words.keywords.append((i, kw))
+        return
+    if kw in W.ERROR_KEYWORDS:
+        raise src.error(i, W.ERROR_KEYWORDS[kw])
+    if kw in W.CONTROL_FLOW:
+        raise src.error(i, f"control flow or subprogram '{kw}' is not supported")
+    if kw.startswith("CYCLE") or kw.startswith("POCKET") or kw.startswith("SLOT"):
+        raise src.error(i, f"Siemens cycle call {kw} is not supported")
+    if kw.startswith("SPLINE") or kw.endswith("SPLINE"):
+        raise src.error(i, "spline interpolation is not supported")
+    if kw.startswith("O"):
+        raise src.error(i, "O-word subprograms and control flow are not supported")
+    raise src.error(i, f"unknown word '{kw}'")

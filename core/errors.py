@@ -1,0 +1,106 @@
+"""Errors and notices.
+
+Every error a user can cause derives from :class:`NcperfError`. It keeps its
+context (source, line, block text) as attributes and formats it in ``str()`` as
+``source:line: message: text`` so the CLI can print it on one line.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+#: Longest block text quoted in a message; a 50 MB line must not end up on the terminal.
+MAX_QUOTED = 60
+
+
+def quote_block(text: str | None) -> str | None:
+    """Shorten a block for an error message (one line, at most MAX_QUOTED characters)."""
+    if text is None:
+        return None
+    text = " ".join(text.split())
+    if len(text) > MAX_QUOTED:
+        text = text[: MAX_QUOTED - 3] + "..."
+    return text
+
+
+class NcperfError(Exception):
+    """Base of every error caused by the user's input.
+
+    Parameters
+    ----------
+    message : str
+        What is wrong, in the user's terms.
+    source : str, optional
+        File name (or host object name) the error is in.
+    line : int, optional
+        1-based line number in ``source``.
+    text : str, optional
+        The offending block, quoted shortened.
+    """
+
+    def __init__(
+        self,
+        message: str,
+        *,
+        source: str | None = None,
+        line: int | None = None,
+        text: str | None = None,
+    ) -> None:
+        super().__init__(message)
+        self.message = message
+        self.source = source
+        self.line = line
+        self.text = quote_block(text)
+
+    def __str__(self) -> str:
+        where = ""
+        if self.source is not None:
+            where = f"{self.source}:"
+            if self.line is not None:
+                where += f"{self.line}:"
+            where += " "
+        elif self.line is not None:
+            where = f"line {self.line}: "
+        msg = f"{where}{self.message}"
+        if self.text:
+            msg += f": {self.text}"
+        return msg
+
+
+class InputError(NcperfError):
+    """A tool path source cannot be read faithfully."""
+
+
+class MachineError(NcperfError):
+    """A machine description is missing a key, misspells one or holds an impossible value."""
+
+
+class UsageError(NcperfError):
+    """The caller asked for something that cannot be done (unknown preset, no adapter...)."""
+
+
+@dataclass(frozen=True)
+class Notice:
+    """A warning about the input that does not stop the analysis.
+
+    Attributes
+    ----------
+    source : str
+        File name.
+    line : int or None
+        1-based line of the first occurrence.
+    message : str
+        What was assumed or passed over.
+    count : int
+        How many lines the same notice applies to.
+    """
+
+    source: str
+    line: int | None
+    message: str
+    count: int = 1
+
+    def __str__(self) -> str:
+        where = f"{self.source}:{self.line}:" if self.line is not None else f"{self.source}:"
+        more = f" ({self.count} lines)" if self.count > 1 else ""
+        return f"{where} warning: {self.message}{more}"

@@ -1,0 +1,96 @@
+"""The typed facade over the plugin manager: the only code that calls ``pm.hook``.
+
+It runs the paper's three tasks in order: A1 extract -> A2 evaluate -> A3 display.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import pluggy
+
+from core.annotations import Annotations, build_annotations
+from core.errors import UsageError
+from core.indicators import Evaluation, Indicator, combine
+from core.machine import Machine
+from core.plugins import make_plugin_manager
+from core.toolpath import ExtractOptions, ToolPath
+
+
+@dataclass(frozen=True, eq=False)
+class Analysis:
+    """The result of A1 + A2: the tool path, the combined evaluation and its annotations."""
+
+    toolpath: ToolPath
+    evaluation: Evaluation
+    annotations: Annotations
+
+
+class Ncperf:
+    """Runs the hooks of one plugin manager (a fresh one by default)."""
+
+    def __init__(self, pm: pluggy.PluginManager | None = None) -> None:
+        self.pm = pm if pm is not None else make_plugin_manager()
+
+    # A1
+    def extract(self, source: object, options: ExtractOptions | None = None) -> ToolPath:
+        """Read a tool path; UsageError when no adapter recognises the source."""
+        tp = self.pm.hook.ncperf_extract(source=source, options=options or ExtractOptions())
+        if tp is None:
+            raise UsageError(f"{source}: no adapter recognises this source "
+                             f"(adapters: {', '.join(self.implementers('ncperf_extract'))})")
+        if not isinstance(tp, ToolPath):
+            raise TypeError(f"ncperf_extract returned {type(tp).__name__}, not ToolPath")
+        return tp
+
+    # A2
+    def indicators(self, toolpath: ToolPath, machine: Machine) -> list[Indicator]:
+        """Every plugin's indicator results, flattened."""
+        out: list[Indicator] = []
+        for result in self.pm.hook.ncperf_evaluate(toolpath=toolpath, machine=machine):
+            for ind in result:
+                if not isinstance(ind, Indicator):
+                    raise TypeError(f"ncperf_evaluate returned {type(ind).__name__}, not Indicator")
+                out.append(ind)
+        return out
+
+    def evaluate(self, toolpath: ToolPath, machine: Machine) -> Evaluation:
+        """The combined prediction of all plugins."""
+        return combine(toolpath, machine, self.indicators(toolpath, machine))
+
+    # A3
+    def display(self, toolpath: ToolPath, annotations: Annotations, target: object) -> object:
+        """Draw annotations on a target; UsageError when no display handles it."""
+        out = self.pm.hook.ncperf_display(toolpath=toolpath, annotations=annotations,
+                                          target=target)
+        if out is None:
+            raise UsageError(f"{target}: no display handles this target "
+                             f"(displays: {', '.join(self.implementers('ncperf_display'))})")
+        return out
+
+    # A1 -> A2 (-> A3)
+    def analyze(self, source: object, machine: Machine,
+                options: ExtractOptions | None = None) -> Analysis:
+        tp = self.extract(source, options)
+        ev = self.evaluate(tp, machine)
+        return Analysis(tp, ev, build_annotations(ev))
+
+    def run(self, source: object, machine: Machine, target: object,
+            options: ExtractOptions | None = None) -> tuple[Analysis, object]:
+        """The paper's Figure 5: extract, evaluate, display."""
+        analysis = self.analyze(source, machine, options)
+        return analysis, self.display(analysis.toolpath, analysis.annotations, target)
+
+    # introspection
+    def implementers(self, hook: str) -> list[str]:
+        caller = getattr(self.pm.hook, hook)
+        return [self.pm.get_name(impl.plugin) or repr(impl.plugin)
+                for impl in reversed(caller.get_hookimpls())]
+
+    def plugins(self) -> list[tuple[str, list[str]]]:
+        """(name, hooks it implements) for every registered plugin."""
+        rows = []
+        for name, plugin in sorted(self.pm.list_name_plugin(), key=lambda x: str(x[0])):
+            hooks = sorted(c.name for c in self.pm.get_hookcallers(plugin) or [])
+            rows.append((str(name), hooks))
+        return rows

@@ -1,0 +1,163 @@
+"""Vectorised geometry of lines and (helical) circular arcs.
+
+An arc is given by its start and end points, its centre (in the plane through
+the start point), the unit normal of its plane, its direction (counter-clockwise
+= positive rotation about the normal) and its sweep angle. A helical arc has an
+end point off that plane; the offset is spread linearly over the sweep.
+
+All functions take arrays over moves and return arrays; lengths in mm,
+angles in rad.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from core.tolerances import TOL
+
+TWO_PI = 2.0 * np.pi
+
+
+def as_points(x: ArrayLike, name: str) -> NDArray[np.float64]:
+    """Convert to an (n, 3) float64 array or raise with the shape in the message."""
+    a = np.asarray(x, dtype=np.float64)
+    if a.ndim != 2 or a.shape[1] != 3:
+        raise ValueError(f"{name} must have shape (n, 3), got {a.shape}")
+    return a
+
+
+def norm(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Row norms of an (n, 3) array."""
+    return np.sqrt(np.einsum("ij,ij->i", v, v))
+
+
+def unit(v: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Row-normalised copy; zero rows stay zero (and NaN rows NaN)."""
+    n = norm(v)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        out = v / np.where(n > 0, n, 1.0)[:, None]
+    return out
+
+
+def dot(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Row-wise dot product of two (n, 3) arrays."""
+    return np.einsum("ij,ij->i", a, b)
+
+
+def angle_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Angle (rad, [0, pi]) between row vectors, accurate for tiny angles.
+
+    ``atan2(|a x b|, a.b)`` keeps full precision near 0 and pi, where
+    ``arccos`` of the dot product loses half the digits.
+    """
+    return np.arctan2(norm(np.cross(a, b)), dot(a, b))
+
+
+def radial(points: NDArray[np.float64], center: NDArray[np.float64],
+           normal: NDArray[np.float64]) -> NDArray[np.float64]:
+    """In-plane vector from the centre to each point (normal component removed)."""
+    r = points - center
+    return r - dot(r, normal)[:, None] * normal
+
+
+def arc_sweep(
+    start: ArrayLike,
+    end: ArrayLike,
+    center: ArrayLike,
+    normal: ArrayLike,
+    ccw: ArrayLike,
+    turns: ArrayLike | None = None,
+) -> NDArray[np.float64]:
+    """Unsigned sweep angle of arcs, in (0, 2 pi (turns + 1)].
+
+    Parameters
+    ----------
+    start, end, center : (n, 3) float, mm
+    normal : (n, 3) float
+        Unit plane normals; counter-clockwise is positive rotation about them.
+    ccw : (n,) bool
+        True for counter-clockwise (G3), False for clockwise (G2).
+    turns : (n,) int, optional
+        Extra full turns (LinuxCNC's ``P`` word minus one).
+
+    Returns
+    -------
+    (n,) float, rad
+        A start and end that coincide in the plane give a full circle (2 pi).
+    """
+    s = as_points(start, "start")
+    e = as_points(end, "end")
+    c = as_points(center, "center")
+    nrm = as_points(normal, "normal")
+    ccw = np.asarray(ccw, dtype=bool)
+    r0 = radial(s, c, nrm)
+    r1 = radial(e, c, nrm)
+    a = np.arctan2(dot(nrm, np.cross(r0, r1)), dot(r0, r1))  # signed, (-pi, pi]
+    a = np.where(ccw, a, -a)
+    theta = np.mod(a, TWO_PI)
+    closed = norm(r1 - r0) <= TOL.zero_length
+    theta = np.where(closed, TWO_PI, theta)
+    if turns is not None:
+        theta = theta + TWO_PI * np.asarray(turns, dtype=np.float64)
+    return theta
+
+
+def arc_pitch(start: NDArray[np.float64], end: NDArray[np.float64],
+              normal: NDArray[np.float64], sweep: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Helix rise per radian along the normal (mm/rad); 0 for planar arcs."""
+    return dot(end - start, normal) / sweep
+
+
+def arc_length(radius: NDArray[np.float64], sweep: NDArray[np.float64],
+               pitch: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Length of helical arcs: sweep * sqrt(r^2 + c^2) with c the pitch per radian."""
+    return sweep * np.hypot(radius, pitch)
+
+
+def arc_tangent(rvec: NDArray[np.float64], normal: NDArray[np.float64],
+                ccw: NDArray[np.bool_], pitch: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit tangent of helical arcs at the point with in-plane radius vector ``rvec``.
+
+    d/dphi of c + Rot(s phi) r0 + c_p phi n is s n x r + c_p n, with s = +1 for
+    counter-clockwise and -1 for clockwise arcs.
+    """
+    s = np.where(ccw, 1.0, -1.0)[:, None]
+    return unit(s * np.cross(normal, rvec) + pitch[:, None] * normal)
+
+
+def arc_curvature(radius: NDArray[np.float64], pitch: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Curvature of a helix, r / (r^2 + c^2) (1/mm); 1/r for planar arcs."""
+    return radius / (radius**2 + pitch**2)
+
+
+def sample_arcs(
+    start: NDArray[np.float64],
+    center: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    ccw: NDArray[np.bool_],
+    sweep: NDArray[np.float64],
+    pitch: NDArray[np.float64],
+    counts: NDArray[np.int64],
+) -> NDArray[np.float64]:
+    """Points along arcs for drawing, ``counts[i] + 1`` per arc (start and end included).
+
+    Returns
+    -------
+    (sum(counts + 1), 3) float, mm
+        The arcs' points one after the other.
+    """
+    counts = np.asarray(counts, dtype=np.int64)
+    m = counts + 1
+    owner = np.repeat(np.arange(len(m)), m)
+    first = np.cumsum(m) - m
+    k = np.arange(owner.size) - first[owner]
+    frac = k / counts[owner]
+    phi = frac * sweep[owner] * np.where(ccw[owner], 1.0, -1.0)
+    r0 = radial(start, center, normal)[owner]
+    n = normal[owner]
+    # Rodrigues' rotation of r0 (perpendicular to n) by phi about n.
+    rot = r0 * np.cos(phi)[:, None] + np.cross(n, r0) * np.sin(phi)[:, None]
+    rise = (pitch[owner] * frac * sweep[owner])[:, None] * n
+    base = center[owner] + dot(start[owner] - center[owner], n)[:, None] * n
+    return base + rot + rise

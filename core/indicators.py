@@ -1,0 +1,234 @@
+"""Indicator results (what A2 plugins return) and their combination.
+
+A plugin returns :class:`Indicator` objects: columnar records at junctions
+(the point between feed moves ``j`` and ``j + 1``) or on elements (move ``i``
+itself), each with the feed the indicator allows there and the limit that
+binds. :func:`combine` keeps, per junction and per element, the lowest feed
+over all plugins, capped by the programmed feed.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass, field
+from functools import cached_property
+from typing import Literal
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from core.machine import Machine
+from core.toolpath import ToolPath
+
+#: Limit label when no indicator is below the programmed feed.
+PROGRAMMED = "programmed feed"
+
+#: Upper edges of the feed-reduction classes (paper, Figure 11: green 0-10 %
+#: ... red above 90 %).
+REDUCTION_EDGES = (0.10, 0.30, 0.50, 0.70, 0.90)
+REDUCTION_LABELS = ("0-10 %", "10-30 %", "30-50 %", "50-70 %", "70-90 %", "> 90 %")
+
+
+def reduction_class(reduction: ArrayLike) -> NDArray[np.int8]:
+    """Class 0..5 of reductions in [0, 1] (0: 0-10 %, 5: above 90 %)."""
+    r = np.asarray(reduction, dtype=np.float64)
+    return np.searchsorted(np.asarray(REDUCTION_EDGES), r, side="right").astype(np.int8)
+
+
+def min_block_length(feed: ArrayLike, interpolation_time: float) -> NDArray[np.float64]:
+    """Eq. (16): L = Vp * t_int, the shortest block the controller runs at feed Vp (mm)."""
+    return np.asarray(feed, dtype=np.float64) * interpolation_time
+
+
+@dataclass(frozen=True, eq=False)
+class Indicator:
+    """One indicator's results, as columns over its records.
+
+    Attributes
+    ----------
+    name : str
+        Indicator name ("tangential", "curvature", "ncu_capacity", ...).
+    at : {"junction", "element"}
+        Junction ``j`` is the point between moves ``j`` and ``j + 1``;
+        element ``i`` is move ``i``.
+    index : (m,) int
+        Junction or element indices, each at most once.
+    feed : (m,) float, mm/s
+        Feed the indicator allows there (may exceed the programmed feed).
+    limit : (m,) int
+        Index into ``labels`` of the limit that binds.
+    labels : tuple of str
+        Limit names, e.g. ("jerk X", "acceleration Y", "block time").
+    values : mapping of str to (m,) arrays
+        Extra columns for reports (e.g. the inserted radius, mm).
+    """
+
+    name: str
+    at: Literal["junction", "element"]
+    index: NDArray[np.int64]
+    feed: NDArray[np.float64]
+    limit: NDArray[np.int64]
+    labels: tuple[str, ...]
+    values: Mapping[str, NDArray] = field(default_factory=dict)
+
+    def __post_init__(self) -> None:
+        if self.at not in ("junction", "element"):
+            raise ValueError(f"at must be 'junction' or 'element', got {self.at!r}")
+        idx = np.ascontiguousarray(self.index, dtype=np.int64)
+        if idx.ndim != 1:
+            raise ValueError(f"index must have shape (m,), got {idx.shape}")
+        m = idx.shape[0]
+        feed = np.ascontiguousarray(self.feed, dtype=np.float64)
+        limit = np.ascontiguousarray(self.limit, dtype=np.int64)
+        for name, a in (("feed", feed), ("limit", limit)):
+            if a.shape != (m,):
+                raise ValueError(f"{name} must have shape ({m},), got {a.shape}")
+        if m and (limit.min() < 0 or limit.max() >= len(self.labels)):
+            raise ValueError(f"limit codes must index labels (0..{len(self.labels) - 1})")
+        if m and np.unique(idx).size != m:
+            raise ValueError(f"indicator {self.name!r} has repeated {self.at} indices")
+        for k, v in self.values.items():
+            if np.shape(v) != (m,):
+                raise ValueError(f"values[{k!r}] must have shape ({m},), got {np.shape(v)}")
+        object.__setattr__(self, "index", idx)
+        object.__setattr__(self, "feed", feed)
+        object.__setattr__(self, "limit", limit)
+        object.__setattr__(self, "labels", tuple(self.labels))
+
+
+@dataclass(frozen=True, eq=False)
+class Evaluation:
+    """The combined prediction of all indicators on one tool path.
+
+    Junction arrays have one row per junction that some indicator reported;
+    element arrays have one row per move (NaN / -1 for rapids).
+
+    Attributes
+    ----------
+    junction : (m,) int
+        Junction indices j (between moves j and j + 1), ascending.
+    junction_programmed : (m,) float, mm/s
+        The smaller of the two blocks' programmed feeds.
+    junction_feed : (m,) float, mm/s
+        Predicted feed: the lowest indicator feed, at most the programmed one.
+    junction_indicator, junction_limit : (m,) int
+        Indices into ``indicator_names`` and ``labels`` of what binds.
+    element_feed : (n,) float, mm/s
+        Predicted feed on each block (programmed unless an element indicator caps it).
+    element_indicator, element_limit : (n,) int
+        What caps each block; -1 where nothing does.
+    min_length : (n,) float, mm
+        Eq. (16) L = F t_int for feed moves, NaN for rapids.
+    """
+
+    toolpath: ToolPath
+    machine: Machine
+    indicators: tuple[Indicator, ...]
+    indicator_names: tuple[str, ...]
+    labels: tuple[str, ...]
+    junction: NDArray[np.int64]
+    junction_programmed: NDArray[np.float64]
+    junction_feed: NDArray[np.float64]
+    junction_indicator: NDArray[np.int64]
+    junction_limit: NDArray[np.int64]
+    element_feed: NDArray[np.float64]
+    element_indicator: NDArray[np.int64]
+    element_limit: NDArray[np.int64]
+    min_length: NDArray[np.float64]
+
+    @cached_property
+    def junction_reduction(self) -> NDArray[np.float64]:
+        """(m,) 1 - predicted / programmed at each reported junction."""
+        return np.clip(1.0 - self.junction_feed / self.junction_programmed, 0.0, 1.0)
+
+    @cached_property
+    def element_reduction(self) -> NDArray[np.float64]:
+        """(n,) 1 - predicted / programmed on each block (NaN for rapids)."""
+        return np.clip(1.0 - self.element_feed / self.toolpath.feed, 0.0, 1.0)
+
+    @cached_property
+    def move_feed(self) -> NDArray[np.float64]:
+        """(n,) lowest predicted feed on a move or at its two ends (mm/s, NaN for rapids)."""
+        f = self.element_feed.copy()
+        jf = self.junction_feed
+        np.fmin.at(f, self.junction, jf)
+        np.fmin.at(f, self.junction + 1, jf)
+        return f
+
+    @cached_property
+    def paper_time(self) -> float:
+        """Feed-move time of the paper's point model, s.
+
+        Each block runs at its own predicted feed (model 3 caps short blocks);
+        discontinuities are points and cost no time, since the paper predicts
+        the feed there but not the braking towards it (the profile adds that).
+        """
+        tp = self.toolpath
+        f = tp.is_feed
+        return float(np.sum(tp.length[f] / self.element_feed[f]))
+
+
+def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator]) -> Evaluation:
+    """Keep, per junction and per element, the lowest feed any indicator allows."""
+    tp = toolpath
+    names: list[str] = []
+    label_id: dict[str, int] = {PROGRAMMED: 0}
+    parts: dict[str, list[tuple[NDArray, NDArray, NDArray, NDArray]]] = {
+        "junction": [], "element": []
+    }
+    for ind in indicators:
+        if ind.name not in names:
+            names.append(ind.name)
+        nid = names.index(ind.name)
+        codes = np.array([label_id.setdefault(lab, len(label_id)) for lab in ind.labels],
+                         dtype=np.int64)
+        limit = codes[ind.limit] if ind.index.size else np.zeros(0, dtype=np.int64)
+        bound = tp.n - 1 if ind.at == "junction" else tp.n
+        if ind.index.size and (ind.index.min() < 0 or ind.index.max() >= bound):
+            raise ValueError(f"indicator {ind.name!r}: {ind.at} index out of range 0..{bound - 1}")
+        parts[ind.at].append(
+            (ind.index, ind.feed, np.full(ind.index.size, nid, dtype=np.int64), limit)
+        )
+
+    def lowest(kind: str) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        if not parts[kind]:
+            z = np.zeros(0, dtype=np.int64)
+            return z, np.zeros(0), z, z
+        idx, feed, ind, lim = (np.concatenate(c) for c in zip(*parts[kind], strict=True))
+        order = np.lexsort((feed, idx))
+        idx, feed, ind, lim = idx[order], feed[order], ind[order], lim[order]
+        first = np.ones(idx.size, dtype=bool)
+        first[1:] = idx[1:] != idx[:-1]
+        return idx[first], feed[first], ind[first], lim[first]
+
+    j, jfeed, jind, jlim = lowest("junction")
+    jprog = np.fmin(tp.feed[j], tp.feed[j + 1])
+    not_below = ~(jfeed < jprog)
+    jlim = np.where(not_below, 0, jlim)
+    jfeed = np.fmin(jfeed, jprog)
+
+    efeed = tp.feed.copy()
+    eind = np.full(tp.n, -1, dtype=np.int64)
+    elim = np.full(tp.n, -1, dtype=np.int64)
+    e, ef, ei, el = lowest("element")
+    below = ef < efeed[e]
+    efeed[e[below]] = ef[below]
+    eind[e[below]] = ei[below]
+    elim[e[below]] = el[below]
+    return Evaluation(
+        toolpath=tp,
+        machine=machine,
+        indicators=tuple(indicators),
+        indicator_names=tuple(names),
+        labels=tuple(label_id),
+        junction=j,
+        junction_programmed=jprog,
+        junction_feed=jfeed,
+        junction_indicator=jind,
+        junction_limit=jlim,
+        element_feed=efeed,
+        element_indicator=eind,
+        element_limit=elim,
+        min_length=np.where(tp.is_feed, min_block_length(tp.feed, machine.interpolation_time),
+                            np.nan),
+    )

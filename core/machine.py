@@ -1,0 +1,255 @@
+"""Machine descriptions: per-axis limits and the controller's times and tolerance.
+
+The TOML file speaks the paper's units (m/min, m/s^2, m/s^3, s, mm); the
+:class:`Machine` object speaks mm and s only::
+
+    name = "..."
+    [axes.X]                # also [axes.Y], [axes.Z]
+    max_feed = 30.0         # m/min
+    max_acceleration = 2.5  # m/s^2
+    max_jerk = 5.0          # m/s^3 (inf: no jerk limit)
+    [controller]
+    interpolation_time = 0.012         # s, t_int (model 3)
+    path_tolerance = 0.01              # mm, TIT (model 1)
+    curvature_transition_time = 0.012  # s, dt (model 2)
+"""
+
+from __future__ import annotations
+
+import difflib
+import math
+import re
+import tomllib
+from dataclasses import dataclass
+from importlib import resources
+from pathlib import Path
+
+import numpy as np
+from numpy.typing import NDArray
+
+from core.errors import MachineError, UsageError
+
+AXES = ("X", "Y", "Z")
+
+#: TOML key -> factor from the file's unit to ncperf's internal unit.
+AXIS_KEYS = {
+    "max_feed": 1000.0 / 60.0,  # m/min -> mm/s
+    "max_acceleration": 1000.0,  # m/s^2 -> mm/s^2
+    "max_jerk": 1000.0,  # m/s^3 -> mm/s^3
+}
+CONTROLLER_KEYS = {
+    "interpolation_time": 1.0,  # s
+    "path_tolerance": 1.0,  # mm
+    "curvature_transition_time": 1.0,  # s
+}
+TOP_KEYS = ("name", "axes", "controller")
+#: Keys that may be infinite ("no such limit"): LinuxCNC 2.9 has no jerk limit.
+MAY_BE_INFINITE = {"max_jerk"}
+
+
+@dataclass(frozen=True, eq=False)
+class Machine:
+    """A machine tool and its controller, in mm and s.
+
+    Attributes
+    ----------
+    name : str
+    max_feed : (3,) float, mm/s
+        Per-axis feed limit (X, Y, Z); also the rapid speed.
+    max_acceleration : (3,) float, mm/s^2
+    max_jerk : (3,) float, mm/s^3
+        May be inf (no jerk limit).
+    interpolation_time : float, s
+        Block cycle time t_int of model 3 (eq. 16).
+    path_tolerance : float, mm
+        Trajectory interpolation tolerance TIT of model 1 (eq. 1).
+    curvature_transition_time : float, s
+        Elementary time dt of model 2 (eq. 11-14).
+    source : str
+        Preset name or file the machine was loaded from.
+    """
+
+    name: str
+    max_feed: NDArray[np.float64]
+    max_acceleration: NDArray[np.float64]
+    max_jerk: NDArray[np.float64]
+    interpolation_time: float
+    path_tolerance: float
+    curvature_transition_time: float
+    source: str = "<memory>"
+
+    def __post_init__(self) -> None:
+        for key in AXIS_KEYS:
+            a = np.array(getattr(self, key), dtype=np.float64)
+            if a.shape != (3,):
+                raise ValueError(f"{key} must have shape (3,), got {a.shape}")
+            a.setflags(write=False)
+            object.__setattr__(self, key, a)
+
+    @classmethod
+    def from_user_units(
+        cls,
+        name: str,
+        *,
+        max_feed_m_min: tuple[float, float, float],
+        max_acceleration_m_s2: tuple[float, float, float],
+        max_jerk_m_s3: tuple[float, float, float],
+        interpolation_time: float,
+        path_tolerance: float,
+        curvature_transition_time: float,
+        source: str = "<memory>",
+    ) -> Machine:
+        """Build a machine from the paper's units (m/min, m/s^2, m/s^3)."""
+        return cls(
+            name=name,
+            max_feed=np.asarray(max_feed_m_min, dtype=float) * AXIS_KEYS["max_feed"],
+            max_acceleration=np.asarray(max_acceleration_m_s2, dtype=float)
+            * AXIS_KEYS["max_acceleration"],
+            max_jerk=np.asarray(max_jerk_m_s3, dtype=float) * AXIS_KEYS["max_jerk"],
+            interpolation_time=interpolation_time,
+            path_tolerance=path_tolerance,
+            curvature_transition_time=curvature_transition_time,
+            source=source,
+        )
+
+    def rapid_speed(self, direction: NDArray[np.float64]) -> NDArray[np.float64]:
+        """Path speed (mm/s) of straight moves along unit ``direction`` (n, 3) with every
+        axis at most at its max feed: min over axes of Vmax_k / |u_k|."""
+        with np.errstate(divide="ignore"):
+            per_axis = self.max_feed[None, :] / np.abs(direction)
+        return per_axis.min(axis=1)
+
+
+# ---------------------------------------------------------------------------- loading
+def _line_of(text: str, key: str) -> int | None:
+    m = re.search(rf"^[ \t]*\"?{re.escape(key)}\"?[ \t]*=", text, flags=re.MULTILINE)
+    return text.count("\n", 0, m.start()) + 1 if m else None
+
+
+def _table_line(text: str, table: str) -> int | None:
+    m = re.search(rf"^[ \t]*\[[ \t]*{re.escape(table)}[ \t]*\]", text, flags=re.MULTILINE)
+    return text.count("\n", 0, m.start()) + 1 if m else None
+
+
+def _check_keys(
+    table: dict, expected: tuple[str, ...], where: str, source: str, text: str
+) -> None:
+    for key in table:
+        if key not in expected:
+            close = difflib.get_close_matches(key, expected, n=1)
+            hint = f"; did you mean '{close[0]}'?" if close else f"; expected one of {', '.join(expected)}"
+            raise MachineError(
+                f"unknown key '{key}' in {where}{hint}", source=source, line=_line_of(text, key)
+            )
+    for key in expected:
+        if key not in table:
+            raise MachineError(
+                f"missing key '{key}' in {where}",
+                source=source,
+                line=_table_line(text, where.strip("[]")) if where.startswith("[") else None,
+            )
+
+
+def _number(value: object, key: str, where: str, source: str, text: str) -> float:
+    line = _line_of(text, key)
+    if isinstance(value, bool) or not isinstance(value, int | float):
+        raise MachineError(
+            f"'{key}' in {where} must be a number, got {value!r}", source=source, line=line
+        )
+    v = float(value)
+    if math.isnan(v) or v <= 0 or (math.isinf(v) and key not in MAY_BE_INFINITE):
+        allowed = "a positive number" + (" or inf" if key in MAY_BE_INFINITE else "")
+        raise MachineError(
+            f"'{key}' in {where} must be {allowed}, got {value!r}", source=source, line=line
+        )
+    return v
+
+
+def machine_from_toml_text(text: str, source: str) -> Machine:
+    """Parse a machine TOML text; every problem is a :class:`MachineError` naming file and line."""
+    try:
+        data = tomllib.loads(text)
+    except tomllib.TOMLDecodeError as exc:
+        m = re.search(r"\(at line (\d+), column \d+\)", str(exc))
+        msg = re.sub(r"\s*\(at line \d+, column \d+\)", "", str(exc))
+        raise MachineError(
+            f"not valid TOML: {msg}", source=source, line=int(m.group(1)) if m else None
+        ) from None
+    _check_keys(data, TOP_KEYS, "the file", source, text)
+    name = data["name"]
+    if not isinstance(name, str) or not name.strip():
+        raise MachineError("'name' must be a non-empty string", source=source,
+                           line=_line_of(text, "name"))
+    axes = data["axes"]
+    if not isinstance(axes, dict):
+        raise MachineError("'axes' must be a table", source=source, line=_line_of(text, "axes"))
+    _check_keys(axes, AXES, "[axes]", source, text)
+    per_axis: dict[str, list[float]] = {k: [] for k in AXIS_KEYS}
+    for ax in AXES:
+        table = axes[ax]
+        where = f"[axes.{ax}]"
+        if not isinstance(table, dict):
+            raise MachineError(f"{where} must be a table", source=source)
+        _check_keys(table, tuple(AXIS_KEYS), where, source, text)
+        for key, factor in AXIS_KEYS.items():
+            per_axis[key].append(_number(table[key], key, where, source, text) * factor)
+    ctrl = data["controller"]
+    if not isinstance(ctrl, dict):
+        raise MachineError("'controller' must be a table", source=source,
+                           line=_line_of(text, "controller"))
+    _check_keys(ctrl, tuple(CONTROLLER_KEYS), "[controller]", source, text)
+    c = {k: _number(ctrl[k], k, "[controller]", source, text) * f
+         for k, f in CONTROLLER_KEYS.items()}
+    return Machine(
+        name=name.strip(),
+        max_feed=np.array(per_axis["max_feed"]),
+        max_acceleration=np.array(per_axis["max_acceleration"]),
+        max_jerk=np.array(per_axis["max_jerk"]),
+        source=source,
+        **c,
+    )
+
+
+def load_machine_file(path: str | Path) -> Machine:
+    """Load a machine TOML file."""
+    p = Path(path)
+    try:
+        raw = p.read_bytes()
+    except OSError as exc:
+        raise MachineError(f"cannot read machine file: {exc.strerror}", source=str(p)) from None
+    try:
+        text = raw.decode("utf-8")
+    except UnicodeDecodeError as exc:
+        line = raw.count(b"\n", 0, exc.start) + 1
+        raise MachineError("not a UTF-8 text file", source=str(p), line=line) from None
+    return machine_from_toml_text(text, str(p))
+
+
+# ---------------------------------------------------------------------------- presets
+DEFAULT_PRESET = "siemens-840d"
+
+
+def preset_names() -> list[str]:
+    """Names of the shipped presets (what ``--machine`` takes)."""
+    files = resources.files("core") / "presets"
+    return sorted(f.name[: -len(".toml")] for f in files.iterdir() if f.name.endswith(".toml"))
+
+
+def load_preset(name: str) -> Machine:
+    """Load a shipped preset by name."""
+    names = preset_names()
+    if name not in names:
+        raise UsageError(f"unknown machine preset '{name}'; presets: {', '.join(names)}")
+    res = resources.files("core") / "presets" / f"{name}.toml"
+    return machine_from_toml_text(res.read_text(encoding="utf-8"), f"preset {name}")
+
+
+def resolve_machine(spec: str | None) -> Machine:
+    """A preset name or a TOML file path (None: the default 840D preset)."""
+    if spec is None:
+        return load_preset(DEFAULT_PRESET)
+    if spec in preset_names():
+        return load_preset(spec)
+    if spec.endswith(".toml") or Path(spec).exists():
+        return load_machine_file(spec)
+    return load_preset(spec)  # raises with the list of presets

@@ -1,0 +1,221 @@
+"""Reports of an analysis: the terminal summary and the JSON file.
+
+Units at this edge: feeds in mm/min (as F words), lengths in mm, times in s.
+"""
+
+from __future__ import annotations
+
+import json
+import math
+from collections.abc import Iterator
+from typing import IO
+
+import numpy as np
+
+from core.facade import Analysis
+from core.indicators import REDUCTION_LABELS, reduction_class
+from core.toolpath import KIND_LABELS
+
+PER_MIN = 60.0
+
+
+def fmt_time(seconds: float) -> str:
+    """1 h 02 min 03.4 s / 2 min 03.4 s / 3.41 s."""
+    if not math.isfinite(seconds):
+        return "n/a"
+    if seconds < 60:
+        return f"{seconds:.2f} s"
+    m, s = divmod(seconds, 60.0)
+    if m < 60:
+        return f"{int(m)} min {s:04.1f} s"
+    h, m = divmod(m, 60.0)
+    return f"{int(h)} h {int(m):02d} min {s:04.1f} s"
+
+
+def rapid_time(an: Analysis) -> float:
+    """Rapids at the axes' max feed (s)."""
+    tp = an.toolpath
+    r = ~tp.is_feed
+    if not r.any():
+        return 0.0
+    v = an.evaluation.machine.rapid_speed(tp.tangent_start[r])
+    return float(np.sum(tp.length[r] / v))
+
+
+def totals(an: Analysis) -> dict[str, float | int]:
+    """Headline numbers of the summary and the JSON file."""
+    tp, ev = an.toolpath, an.evaluation
+    feed = tp.is_feed
+    below = feed & (tp.length < ev.min_length)
+    return {
+        "moves": tp.n,
+        "feed_moves": int(feed.sum()),
+        "arcs": int(tp.is_arc.sum()),
+        "rapids": int((~feed).sum()),
+        "operations": len(tp.op_names),
+        "feed_length_mm": tp.feed_length,
+        "rapid_length_mm": float(tp.length[~feed].sum()),
+        "programmed_time_s": tp.programmed_time,
+        "rapid_time_s": rapid_time(an),
+        "dwell_time_s": float(tp.dwell.sum()),
+        "paper_model_time_s": ev.paper_time,
+        "below_L_share": float(tp.length[below].sum() / tp.feed_length) if tp.feed_length else 0.0,
+        "blocks_below_L": int(below.sum()),
+    }
+
+
+def class_table(an: Analysis) -> list[tuple[str, list[int]]]:
+    """Per indicator: how many reported junctions fall in each reduction class."""
+    ev = an.evaluation
+    cls = reduction_class(ev.junction_reduction)
+    rows = []
+    for k, name in enumerate(ev.indicator_names):
+        sel = ev.junction_indicator == k
+        if sel.any():
+            rows.append((name, np.bincount(cls[sel], minlength=6).tolist()))
+    return rows
+
+
+def summary(an: Analysis, *, machine_note: str = "") -> str:
+    """The terminal summary of ``ncperf analyze``."""
+    tp, ev, ann = an.toolpath, an.evaluation, an.annotations
+    t = totals(an)
+    m = ev.machine
+    lines = [f"ncperf analyze: {tp.source}"]
+    lines.append(f"  machine          {m.name}{machine_note}")
+    lines.append(
+        f"  moves            {t['moves']:,} ({t['feed_moves']:,} feed, of which {t['arcs']:,} "
+        f"arcs; {t['rapids']:,} rapids) in {t['operations']} operation"
+        f"{'s' if t['operations'] != 1 else ''}"
+    )
+    lines.append(f"  feed length      {t['feed_length_mm']:,.1f} mm")
+    lines.append(
+        f"  programmed time  {fmt_time(t['programmed_time_s'])} (feed moves at F; rapids "
+        f"{fmt_time(t['rapid_time_s'])} at max feed; dwell {fmt_time(t['dwell_time_s'])})"
+    )
+    prog = t["programmed_time_s"]
+    extra = (t["paper_model_time_s"] / prog - 1) * 100 if prog else 0.0
+    lines.append(
+        f"  paper-model time {fmt_time(t['paper_model_time_s'])} (+{extra:.1f} %: short blocks "
+        "capped by model 3; discontinuities are points and cost no time)"
+    )
+    lines.append(
+        f"  below L          {t['below_L_share'] * 100:.1f} % of the feed length is in "
+        f"{t['blocks_below_L']:,} blocks shorter than L = F t_int "
+        f"(t_int {m.interpolation_time * 1000:g} ms)"
+    )
+    n_j = int(ev.junction.size)
+    lines.append(f"  discontinuities  {n_j:,} junctions reported, by predicted feed reduction:")
+    rows = class_table(an)
+    head = "".join(f"{lab:>9s}" for lab in REDUCTION_LABELS)
+    lines.append(f"    {'':14s}{head}")
+    for name, counts in rows:
+        lines.append(f"    {name:14s}" + "".join(f"{c:9,d}" for c in counts))
+    capped = ev.element_indicator >= 0
+    if capped.any():
+        for k, name in enumerate(ev.indicator_names):
+            nk = int(np.count_nonzero(ev.element_indicator == k))
+            if nk:
+                lines.append(f"  blocks capped    {nk:,} by {name}")
+    lines.append("  worst zones (path length x reduction; lines of the program):")
+    if not ann.zones:
+        lines.append("    none: no block or junction is predicted 10 % or more below F")
+    else:
+        lines.append(f"    {'#':>2s}  {'lines':15s} {'length':>10s} {'disc.':>6s} {'worst':>6s} "
+                     f"{'min feed':>22s}  cause")
+        for z in ann.zones:
+            feed = f"{z.min_feed * PER_MIN:,.0f} of F{z.programmed_feed * PER_MIN:,.0f}"
+            lines.append(
+                f"    {z.rank:2d}  {z.lines:15s} {z.length:8.1f} mm {z.discontinuities:6d} "
+                f"{-z.worst_reduction * 100:5.0f}% {feed:>15s} mm/min  {z.cause}"
+            )
+    return "\n".join(lines)
+
+
+# ------------------------------------------------------------------------------ JSON
+def _records(keys: tuple[str, ...], columns: list[list]) -> Iterator[str]:
+    for row in zip(*columns, strict=True):
+        yield json.dumps(dict(zip(keys, row, strict=True)), allow_nan=False)
+
+
+def _num(a: np.ndarray, digits: int) -> list:
+    """Rounded floats for JSON; NaN and inf become null."""
+    a = np.round(np.asarray(a, dtype=np.float64), digits)
+    out = a.tolist()
+    bad = ~np.isfinite(a)
+    if bad.any():
+        for i in np.flatnonzero(bad):
+            out[i] = None
+    return out
+
+
+def write_json(an: Analysis, fh: IO[str]) -> None:
+    """The JSON report (streamed: a million junctions do not build a million dicts at once)."""
+    tp, ev = an.toolpath, an.evaluation
+    t = totals(an)
+    head = {
+        "program": tp.source,
+        "machine": ev.machine.name,
+        "machine_source": ev.machine.source,
+        "units_in_file": tp.units,
+        "moves": t["moves"],
+        "feed_length_mm": round(t["feed_length_mm"], 4),
+        "programmed_time_s": round(t["programmed_time_s"], 4),
+        "paper_model_time_s": round(t["paper_model_time_s"], 4),
+        "rapid_time_s": round(t["rapid_time_s"], 4),
+        "dwell_time_s": round(t["dwell_time_s"], 4),
+        "below_L_share": round(t["below_L_share"], 6),
+        "indicators": list(ev.indicator_names),
+        "notices": [str(n) for n in tp.notices],
+        "zones": [
+            {"rank": z.rank, "line_start": z.line_first, "line_end": z.line_last,
+             "length_mm": round(z.length, 4), "discontinuities": z.discontinuities,
+             "worst_reduction": round(z.worst_reduction, 6),
+             "min_feed": round(z.min_feed * PER_MIN, 3), "cause": z.cause}
+            for z in an.annotations.zones
+        ],
+    }
+    text = json.dumps(head, indent=1, allow_nan=False)
+    fh.write(text[:-2] + ",\n")  # reopen the object for the two big arrays
+
+    j = ev.junction
+    names = np.array(ev.indicator_names + ("",), dtype=object)
+    labels = np.array(ev.labels, dtype=object)
+    jcols = [
+        tp.line[j].tolist(),
+        tp.line[j + 1].tolist(),
+        _num(ev.junction_programmed * PER_MIN, 3),
+        _num(ev.junction_feed * PER_MIN, 3),
+        _num(ev.junction_reduction, 6),
+        names[ev.junction_indicator].tolist(),
+        labels[ev.junction_limit].tolist(),
+    ]
+    fh.write(' "junctions": [')
+    _write_rows(fh, _records(("line", "next_line", "programmed_feed", "predicted_feed",
+                              "reduction", "indicator", "limit"), jcols))
+    fh.write("],\n")
+
+    kinds = np.array(KIND_LABELS, dtype=object)
+    el_lim = np.where(ev.element_limit >= 0, ev.element_limit, 0)
+    el_cause = np.where(ev.element_indicator >= 0,
+                        names[ev.element_indicator] + ": " + labels[el_lim], None)
+    ecols = [
+        tp.line.tolist(),
+        kinds[tp.kind].tolist(),
+        _num(tp.length, 5),
+        _num(tp.feed * PER_MIN, 3),
+        _num(ev.element_feed * PER_MIN, 3),
+        _num(ev.min_length, 5),
+        el_cause.tolist(),
+    ]
+    fh.write(' "elements": [')
+    _write_rows(fh, _records(("line", "kind", "length_mm", "programmed_feed",
+                              "predicted_feed", "min_length_mm", "limited_by"), ecols))
+    fh.write("]\n}\n")
+
+
+def _write_rows(fh: IO[str], rows: Iterator[str]) -> None:
+    first = True
+    for r in rows:
+        fh.write(("\n  " if first else ",\n  ") + r)
+        first = False

@@ -1,0 +1,421 @@
+"""The columnar tool path: a few numpy arrays over moves.
+
+There is no move object. A program of a million moves is a handful of
+contiguous arrays; derived quantities (length, tangents, curvature) are
+computed once, vectorised, on first use.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import IntEnum
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from core import geometry as g
+from core.errors import Notice
+from core.tolerances import TOL
+
+
+class MoveKind(IntEnum):
+    """What a move is; stored as int8 in :attr:`ToolPath.kind`."""
+
+    RAPID = 0
+    LINE = 1
+    ARC_CW = 2
+    ARC_CCW = 3
+
+    @property
+    def label(self) -> str:
+        return ("rapid", "line", "arc_cw", "arc_ccw")[self]
+
+
+class PathMode(IntEnum):
+    """How a move ends; stored as int8 in :attr:`ToolPath.path_mode`."""
+
+    #: Continuous path (G64 and Siemens G641..G645): the controller blends into the next move.
+    CONTINUOUS = 0
+    #: Exact stop (G61, G60, G9, or a program stop M0/M1): the move ends at rest.
+    EXACT_STOP = 1
+
+
+KIND_LABELS = ("rapid", "line", "arc_cw", "arc_ccw")
+
+
+@dataclass(frozen=True)
+class ExtractOptions:
+    """What the user tells A1 about a source; adapters read the fields that apply.
+
+    Attributes
+    ----------
+    dialect : str or None
+        Controller dialect of the source (G-code: "fanuc", "siemens",
+        "linuxcnc"); None lets the adapter decide from the file.
+    block_delete : bool
+        The block-delete switch: True skips blocks starting with "/".
+    """
+
+    dialect: str | None = None
+    block_delete: bool = False
+
+
+def _column(x: ArrayLike, n: int, name: str, dtype: type) -> NDArray:
+    a = np.ascontiguousarray(x, dtype=dtype)
+    if a.shape != (n,):
+        raise ValueError(f"{name} must have shape ({n},), got {a.shape}")
+    return a
+
+
+def _points(x: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
+    a = np.ascontiguousarray(x, dtype=np.float64)
+    if a.shape != (n, 3):
+        raise ValueError(f"{name} must have shape ({n}, 3), got {a.shape}")
+    return a
+
+
+@dataclass(frozen=True, eq=False)
+class ToolPath:
+    """A tool path as columns over its ``n`` moves.
+
+    Attributes
+    ----------
+    kind : (n,) int8
+        :class:`MoveKind` of each move.
+    start, end : (n, 3) float, mm
+        End points of each move.
+    center : (n, 3) float, mm
+        Arc centre, in the plane through the arc's start point; NaN for lines.
+    normal : (n, 3) float
+        Unit normal of the arc's plane (G17 +Z, G18 +Y, G19 +X); NaN for lines.
+        Counter-clockwise (G3) is a positive rotation about it.
+    sweep : (n,) float, rad
+        Unsigned sweep angle of arcs (full circles 2 pi, multi-turn helices
+        more); NaN for lines.
+    feed : (n,) float, mm/s
+        Programmed feed; NaN for rapids.
+    line : (n,) int64
+        1-based source line of the block.
+    block : (n,) int64
+        Block number (N word), -1 where none.
+    tool : (n,) int32
+        Tool number, -1 where unknown.
+    path_mode : (n,) int8
+        :class:`PathMode` at the end of each move.
+    dwell : (n,) float, s
+        Dwell (G4) after the move.
+    tolerance : (n,) float, mm
+        Path tolerance the program sets for the move (LinuxCNC ``G64 P``);
+        NaN where the machine's own TIT applies.
+    op_offsets : (k + 1,) int64
+        Moves ``op_offsets[i]:op_offsets[i + 1]`` form operation ``i``.
+    op_names : tuple of str
+        One name per operation.
+    source : str
+        Where the path came from (file name or host document).
+    notices : tuple of Notice
+        What the adapter assumed or passed over.
+    tool_axis : (n, 3) float or None
+        Tool axis of 5-axis sources; None for 3-axis paths.
+    units : str
+        Units the source was written in ("mm" or "inch"); the arrays are always mm.
+    """
+
+    kind: NDArray[np.int8]
+    start: NDArray[np.float64]
+    end: NDArray[np.float64]
+    center: NDArray[np.float64]
+    normal: NDArray[np.float64]
+    sweep: NDArray[np.float64]
+    feed: NDArray[np.float64]
+    line: NDArray[np.int64]
+    block: NDArray[np.int64]
+    tool: NDArray[np.int32]
+    path_mode: NDArray[np.int8]
+    dwell: NDArray[np.float64]
+    tolerance: NDArray[np.float64]
+    op_offsets: NDArray[np.int64]
+    op_names: tuple[str, ...] = ()
+    source: str = "<memory>"
+    notices: tuple[Notice, ...] = ()
+    tool_axis: NDArray[np.float64] | None = None
+    units: str = "mm"
+
+    def __post_init__(self) -> None:
+        kind = np.ascontiguousarray(self.kind, dtype=np.int8)
+        if kind.ndim != 1:
+            raise ValueError(f"kind must have shape (n,), got {kind.shape}")
+        n = kind.shape[0]
+        set_ = object.__setattr__
+        set_(self, "kind", kind)
+        for name in ("start", "end", "center", "normal"):
+            set_(self, name, _points(getattr(self, name), n, name))
+        for name, dtype in (
+            ("sweep", np.float64),
+            ("feed", np.float64),
+            ("line", np.int64),
+            ("block", np.int64),
+            ("tool", np.int32),
+            ("path_mode", np.int8),
+            ("dwell", np.float64),
+            ("tolerance", np.float64),
+        ):
+            set_(self, name, _column(getattr(self, name), n, name, dtype))
+        offs = np.ascontiguousarray(self.op_offsets, dtype=np.int64)
+        if offs.ndim != 1 or offs.size < 1 or offs[0] != 0 or offs[-1] != n or np.any(
+            np.diff(offs) < 0
+        ):
+            raise ValueError(f"op_offsets must rise from 0 to {n}, got {offs[:5]}...")
+        set_(self, "op_offsets", offs)
+        names = tuple(self.op_names) or tuple(f"operation {i + 1}" for i in range(offs.size - 1))
+        if len(names) != offs.size - 1:
+            raise ValueError(f"op_names has {len(names)} names for {offs.size - 1} operations")
+        set_(self, "op_names", names)
+        if self.tool_axis is not None:
+            set_(self, "tool_axis", _points(self.tool_axis, n, "tool_axis"))
+
+    # ------------------------------------------------------------------ basics
+    def __len__(self) -> int:
+        return int(self.kind.shape[0])
+
+    @property
+    def n(self) -> int:
+        """Number of moves."""
+        return len(self)
+
+    @cached_property
+    def is_arc(self) -> NDArray[np.bool_]:
+        return self.kind >= MoveKind.ARC_CW
+
+    @cached_property
+    def is_feed(self) -> NDArray[np.bool_]:
+        """Feed moves (lines and arcs), i.e. everything but rapids."""
+        return self.kind != MoveKind.RAPID
+
+    @cached_property
+    def op_index(self) -> NDArray[np.int64]:
+        """(n,) operation of each move."""
+        return np.repeat(np.arange(self.op_offsets.size - 1), np.diff(self.op_offsets))
+
+    # ------------------------------------------------------------------ arcs
+    @cached_property
+    def _arc(self) -> dict[str, NDArray]:
+        idx = np.flatnonzero(self.is_arc)
+        s, e, c, nrm = self.start[idx], self.end[idx], self.center[idx], self.normal[idx]
+        sweep = self.sweep[idx]
+        ccw = self.kind[idx] == MoveKind.ARC_CCW
+        r0 = g.radial(s, c, nrm)
+        r1 = g.radial(e, c, nrm)
+        radius = g.norm(r0)
+        pitch = g.arc_pitch(s, e, nrm, sweep)
+        return {
+            "idx": idx, "r0": r0, "r1": r1, "radius": radius, "pitch": pitch, "ccw": ccw,
+        }
+
+    @cached_property
+    def radius(self) -> NDArray[np.float64]:
+        """(n,) arc radius at the start (mm); NaN for lines."""
+        out = np.full(self.n, np.nan)
+        out[self._arc["idx"]] = self._arc["radius"]
+        return out
+
+    @cached_property
+    def pitch(self) -> NDArray[np.float64]:
+        """(n,) helix rise per radian along the normal (mm/rad); NaN for lines."""
+        out = np.full(self.n, np.nan)
+        out[self._arc["idx"]] = self._arc["pitch"]
+        return out
+
+    # ------------------------------------------------------------------ derived
+    @cached_property
+    def length(self) -> NDArray[np.float64]:
+        """(n,) path length of each move, mm."""
+        out = g.norm(self.end - self.start)
+        a = self._arc
+        out[a["idx"]] = g.arc_length(a["radius"], self.sweep[a["idx"]], a["pitch"])
+        return out
+
+    @cached_property
+    def tangent_start(self) -> NDArray[np.float64]:
+        """(n, 3) unit tangent at the start of each move."""
+        out = g.unit(self.end - self.start)
+        a = self._arc
+        out[a["idx"]] = g.arc_tangent(a["r0"], self.normal[a["idx"]], a["ccw"], a["pitch"])
+        return out
+
+    @cached_property
+    def tangent_end(self) -> NDArray[np.float64]:
+        """(n, 3) unit tangent at the end of each move."""
+        out = g.unit(self.end - self.start)
+        a = self._arc
+        out[a["idx"]] = g.arc_tangent(a["r1"], self.normal[a["idx"]], a["ccw"], a["pitch"])
+        return out
+
+    @cached_property
+    def curvature(self) -> NDArray[np.float64]:
+        """(n,) signed curvature, 1/mm: 0 for lines, + for counter-clockwise arcs
+        and - for clockwise arcs about their plane normal (helices r/(r^2+c^2))."""
+        out = np.zeros(self.n)
+        a = self._arc
+        k = g.arc_curvature(a["radius"], a["pitch"])
+        out[a["idx"]] = np.where(a["ccw"], k, -k)
+        return out
+
+    def _curvature_vector(self, rkey: str) -> NDArray[np.float64]:
+        out = np.zeros((self.n, 3))
+        a = self._arc
+        k = g.arc_curvature(a["radius"], a["pitch"])
+        # A helix's principal normal points from the point to the axis: -r / |r|.
+        out[a["idx"]] = -g.unit(a[rkey]) * k[:, None]
+        return out
+
+    @cached_property
+    def curvature_vector_start(self) -> NDArray[np.float64]:
+        """(n, 3) curvature vector (kappa times principal normal) at each move's start, 1/mm."""
+        return self._curvature_vector("r0")
+
+    @cached_property
+    def curvature_vector_end(self) -> NDArray[np.float64]:
+        """(n, 3) curvature vector at each move's end, 1/mm."""
+        return self._curvature_vector("r1")
+
+    # ------------------------------------------------------------------ junctions
+    @cached_property
+    def junctions(self) -> NDArray[np.int64]:
+        """Indices ``j`` of the points between feed moves ``j`` and ``j + 1`` of one operation.
+
+        These are the points where a tangential or curvature discontinuity can
+        be; a rapid or an operation boundary in between breaks the chain.
+        """
+        if self.n < 2:
+            return np.zeros(0, dtype=np.int64)
+        f = self.is_feed
+        op = self.op_index
+        ok = f[:-1] & f[1:] & (op[:-1] == op[1:])
+        return np.flatnonzero(ok)
+
+    @cached_property
+    def turn_angle(self) -> NDArray[np.float64]:
+        """(n - 1,) direction change beta (rad, [0, pi]) between move j's end and move j+1's start."""
+        if self.n < 2:
+            return np.zeros(0)
+        return g.angle_between(self.tangent_end[:-1], self.tangent_start[1:])
+
+    @cached_property
+    def curvature_jump(self) -> NDArray[np.float64]:
+        """(n - 1,) norm of the jump of the curvature vector at each junction, 1/mm.
+
+        For coplanar moves this is the jump of the signed curvature:
+        |1/R1 - 1/R2| for arcs turning the same way, 1/R1 + 1/R2 at an inflection,
+        1/R between a line and an arc.
+        """
+        if self.n < 2:
+            return np.zeros(0)
+        return g.norm(self.curvature_vector_end[:-1] - self.curvature_vector_start[1:])
+
+    # ------------------------------------------------------------------ totals
+    @cached_property
+    def feed_length(self) -> float:
+        """Total length of feed moves, mm."""
+        return float(self.length[self.is_feed].sum())
+
+    @cached_property
+    def programmed_time(self) -> float:
+        """Sum of length / F over feed moves, s."""
+        f = self.is_feed
+        return float(np.sum(self.length[f] / self.feed[f]))
+
+    def describe_lines(self, i: int, j: int | None = None) -> str:
+        """Source line (range) of move ``i`` (to ``j``) for messages."""
+        a = int(self.line[i])
+        b = a if j is None else int(self.line[j])
+        lo, hi = min(a, b), max(a, b)
+        return f"{lo}" if lo == hi else f"{lo}-{hi}"
+
+
+def empty_columns(n: int) -> dict[str, NDArray]:
+    """Default columns for ``n`` moves, for adapters and tests to fill in."""
+    return {
+        "kind": np.full(n, MoveKind.LINE, dtype=np.int8),
+        "start": np.zeros((n, 3)),
+        "end": np.zeros((n, 3)),
+        "center": np.full((n, 3), np.nan),
+        "normal": np.full((n, 3), np.nan),
+        "sweep": np.full(n, np.nan),
+        "feed": np.full(n, np.nan),
+        "line": np.arange(1, n + 1, dtype=np.int64),
+        "block": np.full(n, -1, dtype=np.int64),
+        "tool": np.full(n, -1, dtype=np.int32),
+        "path_mode": np.zeros(n, dtype=np.int8),
+        "dwell": np.zeros(n),
+        "tolerance": np.full(n, np.nan),
+        "op_offsets": np.array([0, n], dtype=np.int64),
+    }
+
+
+def polyline(points: ArrayLike, feed: float, *, source: str = "<polyline>") -> ToolPath:
+    """A tool path of G1 lines through ``points`` at one feed.
+
+    Parameters
+    ----------
+    points : (m, 3) float, mm
+        At least two points.
+    feed : float, mm/s
+    """
+    p = g.as_points(points, "points")
+    if p.shape[0] < 2:
+        raise ValueError(f"points must have at least 2 rows, got {p.shape}")
+    cols = empty_columns(p.shape[0] - 1)
+    cols["start"] = p[:-1]
+    cols["end"] = p[1:]
+    cols["feed"][:] = feed
+    return ToolPath(**cols, source=source)
+
+
+def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
+    """Remove moves shorter than :attr:`Tolerances.zero_length` (they carry no direction).
+
+    Returns the cleaned path and the indices of the removed moves. A dwell or
+    exact stop on a removed move moves to the move before it.
+    """
+    zero = tp.length <= TOL.zero_length
+    if not zero.any():
+        return tp, np.zeros(0, dtype=np.int64)
+    keep = ~zero
+    removed = np.flatnonzero(zero)
+    # Carry stops and dwells of removed moves back to the last kept move before them.
+    last_kept = np.maximum.accumulate(np.where(keep, np.arange(tp.n), -1))
+    target = last_kept[removed]
+    has = target >= 0
+    dwell = tp.dwell.copy()
+    np.add.at(dwell, target[has], tp.dwell[removed[has]])
+    mode = tp.path_mode.copy()
+    np.maximum.at(mode, target[has], tp.path_mode[removed[has]])
+    offs = np.concatenate([[0], np.cumsum(keep)])[tp.op_offsets].astype(np.int64)
+    cols = {
+        "kind": tp.kind[keep], "start": tp.start[keep], "end": tp.end[keep],
+        "center": tp.center[keep], "normal": tp.normal[keep], "sweep": tp.sweep[keep],
+        "feed": tp.feed[keep], "line": tp.line[keep], "block": tp.block[keep],
+        "tool": tp.tool[keep], "path_mode": mode[keep], "dwell": dwell[keep],
+        "tolerance": tp.tolerance[keep],
+    }
+    names = tp.op_names
+    # Drop operations left empty.
+    sizes = np.diff(offs)
+    if np.any(sizes == 0):
+        keep_op = np.flatnonzero(sizes > 0)
+        names = tuple(names[i] for i in keep_op)
+        offs = np.concatenate([[0], offs[1:][keep_op]])
+    return (
+        ToolPath(
+            **cols,
+            op_offsets=offs,
+            op_names=names,
+            source=tp.source,
+            notices=tp.notices,
+            tool_axis=None if tp.tool_axis is None else tp.tool_axis[keep],
+            units=tp.units,
+        ),
+        removed,
+    )

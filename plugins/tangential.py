@@ -1,0 +1,165 @@
+"""Model 1: crossing a tangential discontinuity (Tapie et al., sec. 3.2, eq. 1-10).
+
+The controller replaces the corner between two blocks by an arc of radius R
+(eq. 1) and crosses it at constant speed, where the normal acceleration
+V^2/R (eq. 2) and the tangential jerk V^3/R^2 (eq. 3) must stay within the
+machine's limits:
+
+    R  = min(TIT cos(b/2) / (1 - cos(b/2)),  l / (2 sin(b/2)) - TIT),  l = min(l1, l2)   (1)
+    Vf = min(Vmax, sqrt(A R), cbrt(J R^2))                                           (4-6)
+
+with b the direction change between the blocks.
+
+Per-axis limits, in 3-D
+-----------------------
+The inserted arc lies in the plane of the two tangents t1, t2. With u the unit
+vector of that plane perpendicular to t1 (towards t2), the arc's tangent and
+normal at sweep angle phi in [0, b] are
+
+    t(phi) = cos(phi) t1 + sin(phi) u,    n(phi) = -sin(phi) t1 + cos(phi) u.
+
+Along the arc the feed and the jerk (eq. 3, along t) load axis k with the
+share |t_k(phi)|, the acceleration (eq. 2, along n) with |n_k(phi)|. Each
+axis limit is divided by that axis's largest share over the sweep:
+
+    Vmax = min_k Vmax_k / max|t_k|,   A = min_k A_k / max|n_k|,   J = min_k J_k / max|t_k|.
+
+``a cos(phi) + b sin(phi)`` peaks in absolute value at sqrt(a^2 + b^2) where
+phi = atan2(b, a) (mod pi); if that angle is inside [0, b] the share is that
+peak, else the larger of the two ends. In the XY case of the paper, t1 and u
+span the XY plane, so for X the peak is 1 at the angle where t is along X:
+that is eq. (7) (t(alpha).Y_m = 0); inside the sweep it gives J = J_X (eq. 8),
+outside it the share of the nearer end, |X1.Y_m| or |X2.Y_m| in the paper's
+notation (eq. 9, 10). The same holds for Y, for the feed and, with n in place
+of t, for the acceleration. A 3-D corner adds the Z share the same way.
+
+TIT is the machine's path tolerance, or the program's own where it sets one
+(LinuxCNC ``G64 P``).
+"""
+
+from __future__ import annotations
+
+import numpy as np
+from numpy.typing import NDArray
+
+from core import TOL, Indicator, Machine, ToolPath, hookimpl
+from core import geometry as g
+
+NAME = "tangential"
+AXES = ("X", "Y", "Z")
+LABELS = tuple(f"{q} {ax}" for q in ("feed", "acceleration", "jerk") for ax in AXES)
+
+
+def inserted_radius(beta: NDArray[np.float64], length: NDArray[np.float64],
+                    tit: NDArray[np.float64] | float) -> NDArray[np.float64]:
+    """Eq. (1): radius (mm) of the arc inserted at a corner of direction change ``beta``.
+
+    Parameters
+    ----------
+    beta : (m,) float, rad
+        Direction change, (0, pi].
+    length : (m,) float, mm
+        The shorter of the two adjacent blocks.
+    tit : float or (m,) float, mm
+        Trajectory interpolation tolerance.
+
+    Returns
+    -------
+    (m,) float, mm
+        Never negative: blocks too short for the tolerance give 0 (a stop).
+    """
+    beta = np.asarray(beta, dtype=np.float64)
+    half = beta / 2.0
+    # 1 - cos(b/2) = 2 sin^2(b/4), without cancellation for small angles.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        r_tol = tit * np.cos(half) / (2.0 * np.sin(beta / 4.0) ** 2)
+        r_len = np.asarray(length, dtype=np.float64) / (2.0 * np.sin(half)) - tit
+    return np.maximum(np.fmin(r_tol, r_len), 0.0)
+
+
+def max_share(a: NDArray[np.float64], b: NDArray[np.float64],
+              sweep: NDArray[np.float64]) -> NDArray[np.float64]:
+    """max over phi in [0, sweep] of |a cos(phi) + b sin(phi)|, elementwise."""
+    peak = np.hypot(a, b)
+    phi_peak = np.mod(np.arctan2(b, a), np.pi)
+    at_end = np.maximum(np.abs(a), np.abs(a * np.cos(sweep) + b * np.sin(sweep)))
+    return np.where(phi_peak <= sweep, peak, at_end)
+
+
+def _in_plane_normal(t1: NDArray[np.float64], t2: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Unit u perpendicular to t1 in the plane (t1, t2), pointing towards t2."""
+    u = t2 - g.dot(t1, t2)[:, None] * t1
+    n = g.norm(u)
+    bad = n < 1e-12  # a reversal (beta = pi): any perpendicular does, R is 0 anyway
+    if bad.any():
+        tb = t1[bad]
+        helper = np.eye(3)[np.argmin(np.abs(tb), axis=1)]
+        u[bad] = np.cross(tb, helper)
+        n[bad] = g.norm(u[bad])
+    return u / n[:, None]
+
+
+def corner_feed(
+    t1: NDArray[np.float64],
+    t2: NDArray[np.float64],
+    radius: NDArray[np.float64],
+    machine: Machine,
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """Eq. (4)-(10) in 3-D: the feed on inserted arcs and the limit that binds.
+
+    Parameters
+    ----------
+    t1, t2 : (m, 3) float
+        Unit tangents before and after the corner.
+    radius : (m,) float, mm
+        Inserted arc radius (eq. 1).
+    machine : Machine
+
+    Returns
+    -------
+    feed : (m,) float, mm/s
+    limit : (m,) int
+        Index into :data:`LABELS`.
+    """
+    beta = g.angle_between(t1, t2)
+    u = _in_plane_normal(t1, t2)
+    b = beta[:, None]
+    share_t = max_share(t1, u, b)
+    share_n = max_share(u, -t1, b)
+    R = radius[:, None]
+    inf = np.inf
+    # An axis with no share over the arc sets no limit.
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v_feed = np.where(share_t > 0, machine.max_feed / share_t, inf)
+        v_acc = np.where(share_n > 0, np.sqrt(machine.max_acceleration * R / share_n), inf)
+        v_jerk = np.where(share_t > 0, np.cbrt(machine.max_jerk * R**2 / share_t), inf)
+    # inf jerk times a zero radius is NaN: no radius means a stop.
+    cand = np.nan_to_num(np.concatenate([v_feed, v_acc, v_jerk], axis=1), nan=0.0, posinf=inf)
+    limit = np.argmin(cand, axis=1)
+    return cand[np.arange(cand.shape[0]), limit], limit
+
+
+@hookimpl
+def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
+    """Model 1 at every junction whose direction changes by more than TOL.collinear_angle."""
+    tp = toolpath
+    j = tp.junctions
+    beta = tp.turn_angle[j]
+    j = j[beta > TOL.collinear_angle]
+    beta = tp.turn_angle[j]
+    shorter = np.minimum(tp.length[j], tp.length[j + 1])
+    tol = tp.tolerance[j]
+    tit = np.where(np.isnan(tol), machine.path_tolerance, tol)
+    radius = inserted_radius(beta, shorter, tit)
+    feed, limit = corner_feed(tp.tangent_end[j], tp.tangent_start[j + 1], radius, machine)
+    return [
+        Indicator(
+            name=NAME,
+            at="junction",
+            index=j,
+            feed=feed,
+            limit=limit,
+            labels=LABELS,
+            values={"radius_mm": radius, "angle_deg": np.degrees(beta)},
+        )
+    ]
