@@ -212,6 +212,8 @@ def tokenize(src: Source) -> Words:
         for a, b in _line_ranges(lfpos, c.size, bad_arr):
             sep[a:b] = SPACE
         want = ~empty & ~np.isin(wline, bad_arr)
+        if not want.any():
+            break
         vals = _fromstring(sep)
         if vals is not None and vals.size == np.count_nonzero(want):
             values[want] = vals
@@ -300,15 +302,33 @@ _TOKEN = re.compile(
 _NUMBER = re.compile(r"[-+]?(?:\d+\.?\d*|\.\d+)$")
 
 
+def _is_call(text: str, k: int) -> bool:
+    """Whether the "(" at ``text[k]`` opens the arguments of a keyword (Siemens IC(5),
+    MSG("..."), CYCLE832(...)) rather than a comment: the word before it starts with two
+    letters. G1(...), X10(...) and N10(...) are single-letter words: comments."""
+    j = k
+    while j > 0 and (text[j - 1].isalnum() or text[j - 1] == "_"):
+        j -= 1
+    word = text[j:k]
+    return len(word) >= 2 and word[0].isalpha() and word[1].isalpha()
+
+
 def _strip_comments(src: Source, i: int, text: str) -> str:
     """Remove ( ) and ; comments from one line; errors for unclosed or nested ( )."""
     out = []
     depth = 0
-    for ch in text:
+    call = 0  # open parentheses of keyword arguments
+    for k, ch in enumerate(text):
         if depth == 0:
             if ch == ";":
                 break
-            if ch == "(":
+            if ch == "(" and (call or _is_call(text, k)):
+                call += 1
+                out.append(ch)
+            elif ch == ")" and call:
+                call -= 1
+                out.append(ch)
+            elif ch == "(":
                 depth = 1
                 out.append(" ")
             elif ch == ")":
@@ -384,7 +404,10 @@ def tokenize_line(src: Source, i: int, words: Words) -> list[tuple[int, int, flo
             if tok[0] == "/":
                 raise src.error(i, "'/' inside a block (block delete must start the line)")
             if tok[0].isalpha():
-                raise src.error(i, f"word '{tok[0]}' has no number")
+                rest = tok[1:]
+                if not rest or rest[0] not in "0123456789.+-":
+                    raise src.error(i, f"word '{tok[0]}' has no number")
+                raise src.error(i, f"malformed number '{rest}' after {tok[0]}")
             raise src.error(i, f"malformed number or word '{tok}'")
     return rows
 
@@ -396,7 +419,8 @@ def _keyword(src: Source, i: int, kw: str, words: Words) -> None:
     if kw in W.ERROR_KEYWORDS:
         raise src.error(i, W.ERROR_KEYWORDS[kw])
     if kw in W.CONTROL_FLOW:
-        raise src.error(i, f"control flow or subprogram '{kw}' is not supported")
+        raise src.error(i, f"control flow or subprogram '{kw}' (O-words, macros) is not "
+                        "supported")
     if kw.startswith("CYCLE") or kw.startswith("POCKET") or kw.startswith("SLOT"):
         raise src.error(i, f"Siemens cycle call {kw} is not supported")
     if kw.startswith("SPLINE") or kw.endswith("SPLINE"):
