@@ -24,8 +24,8 @@ LENGTH_LABELS = ("shorter than L (feed capped)", "L to 2 L", "2 L and longer")
 LENGTH_COLOURS = ("#d73027", "#fdae61", "#1a9850")
 RAPID_COLOUR = "#9e9e9e"
 
-#: A move belongs to a critical zone when its feed, or the feed at one of its
-#: ends, is predicted at least this much below the programmed feed.
+#: A junction or block is a slow point of a zone when its predicted feed is at least
+#: this much below the programmed feed (the paper's green class ends at 10 %).
 ZONE_THRESHOLD = 0.10
 
 
@@ -54,29 +54,34 @@ class FileTarget:
 
 @dataclass(frozen=True)
 class Zone:
-    """A run of consecutive feed moves predicted to slow down.
+    """A cluster of slow points: junctions and capped blocks close enough together that the
+    machine cannot regain the programmed feed between them.
 
     Attributes
     ----------
     rank : int
-        1 = worst.
+        1 = worst (most time lost).
     first, last : int
-        Move indices (inclusive).
+        First and last move index involved.
     line_first, line_last : int
-        Lowest and highest source line in the run.
+        Lowest and highest source line involved.
     length : float, mm
+        Path length from the first slow point to the last (0 for a single corner).
     discontinuities : int
-        Junctions inside or at the ends of the run that an indicator reported.
+        Junctions in the zone predicted >= ZONE_THRESHOLD below F.
+    capped_blocks : int
+        Blocks in the zone whose own feed is capped (model 3 and element plugins).
     worst_reduction : float
-        Largest reduction in the run (0..1).
+        Largest reduction in the zone (0..1).
     min_feed : float, mm/s
-        Lowest predicted feed in the run.
+        Lowest predicted feed in the zone.
     programmed_feed : float, mm/s
         Programmed feed where the minimum is.
     cause : str
         Indicator and limit of the minimum, e.g. "tangential: jerk X".
-    score : float, mm
-        Sum of length x reduction over the run's moves: path "lost" to slow-down.
+    time_lost : float, s
+        Rough cost: each slow point braked into and left at the machine's lowest axis
+        acceleration A, (F - v)^2 / (A F), plus the slower traverse of capped blocks.
     point : (3,) float, mm
         Where the minimum is (for labels).
     """
@@ -88,11 +93,12 @@ class Zone:
     line_last: int
     length: float
     discontinuities: int
+    capped_blocks: int
     worst_reduction: float
     min_feed: float
     programmed_feed: float
     cause: str
-    score: float
+    time_lost: float
     point: tuple[float, float, float]
 
     @property
@@ -158,86 +164,117 @@ class Annotations:
     rapid_colour: str = RAPID_COLOUR
 
 
-def move_reduction(ev: Evaluation) -> NDArray[np.float64]:
-    """(n,) reduction of the lowest predicted feed on each move or at its ends (NaN: rapids)."""
-    return np.clip(1.0 - ev.move_feed / ev.toolpath.feed, 0.0, 1.0)
+def _gap_loss(d: NDArray, v1: NDArray, v2: NDArray, f: NDArray, acc: float) -> NDArray:
+    """Extra time (s) over distance d (mm) from speed v1 to v2 (mm/s), accelerating at most
+    at ``acc`` and never above f, compared with running it at f (trapezoid, exact)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        peak = np.minimum(f, np.sqrt(acc * d + 0.5 * (v1**2 + v2**2)))
+        feasible = peak >= np.maximum(v1, v2)
+        ramps = (2 * peak - v1 - v2) / acc
+        cruise = (d - (2 * peak**2 - v1**2 - v2**2) / (2 * acc)) / peak
+        t = np.where(feasible, ramps + cruise, 2 * d / (v1 + v2))
+        out = t - d / f
+    return np.nan_to_num(np.maximum(out, 0.0), posinf=0.0)
 
 
 def find_zones(ev: Evaluation, count: int = 10) -> tuple[Zone, ...]:
-    """The ``count`` worst runs of consecutive feed moves slowed by >= ZONE_THRESHOLD.
+    """The ``count`` zones that cost the most time.
 
-    Runs break at rapids and operation changes. Worst = largest sum of
-    length x reduction (the path length the slow-down costs).
+    Slow points are junctions predicted at least ZONE_THRESHOLD below the programmed feed
+    and blocks whose own feed is capped that much. Consecutive slow points join one zone
+    when the path between them is shorter than F^2 / (2 A) -- the distance the machine
+    needs to regain the feed F from a stop at its lowest axis acceleration A -- and no
+    rapid or operation change lies between. Zones are ranked by ``Zone.time_lost``.
     """
     tp = ev.toolpath
     if tp.n == 0:
         return ()
-    red = move_reduction(ev)
-    flag = tp.is_feed & (np.nan_to_num(red) >= ZONE_THRESHOLD)
-    cont = np.zeros(tp.n, dtype=bool)  # move i continues the run of move i-1
-    cont[1:] = flag[1:] & flag[:-1] & (tp.op_index[1:] == tp.op_index[:-1])
-    starts = np.flatnonzero(flag & ~cont)
-    if starts.size == 0:
+    acc = float(np.min(ev.machine.max_acceleration))
+    s_end = np.cumsum(tp.length)
+    s_start = s_end - tp.length
+    # Events: slow junctions (a point at the end of move j) and capped blocks (a span).
+    jsel = np.flatnonzero(ev.junction_reduction >= ZONE_THRESHOLD)
+    esel = np.flatnonzero(tp.is_feed & (np.nan_to_num(ev.element_reduction) >= ZONE_THRESHOLD))
+    jm = ev.junction[jsel]
+    n_j = jsel.size
+    first_move = np.concatenate([jm, esel])
+    last_move = np.concatenate([jm + 1, esel])
+    pos_a = np.concatenate([s_end[jm], s_start[esel]])
+    pos_b = np.concatenate([s_end[jm], s_end[esel]])
+    v = np.concatenate([ev.junction_feed[jsel], ev.element_feed[esel]])
+    f = np.concatenate([ev.junction_programmed[jsel], tp.feed[esel]])
+    if v.size == 0:
         return ()
-    run_id = np.cumsum(flag & ~cont) - 1
-    idx = np.flatnonzero(flag)
-    rid = run_id[idx]
-    ends = np.zeros(starts.size, dtype=np.int64)
-    np.maximum.at(ends, rid, idx)
-    score = np.bincount(rid, weights=tp.length[idx] * red[idx], minlength=starts.size)
-    order = np.argsort(-score, kind="stable")[:count]
+    is_j = np.arange(v.size) < n_j
+    cause = np.concatenate([
+        ev.junction_indicator[jsel] * 10_000 + ev.junction_limit[jsel],
+        ev.element_indicator[esel] * 10_000 + ev.element_limit[esel]])
 
-    # Junction lookups: predicted feed and cause at junction j.
-    jpos = np.full(tp.n, -1, dtype=np.int64)
-    jpos[ev.junction] = np.arange(ev.junction.size)
+    order = np.lexsort((pos_b, pos_a))
+    (first_move, last_move, pos_a, pos_b, v, f, is_j, cause) = (
+        x[order] for x in (first_move, last_move, pos_a, pos_b, v, f, is_j, cause))
+    # A rapid or operation change between two events breaks the zone.
+    barrier = np.cumsum(~tp.is_feed) + tp.op_index * (tp.n + 1)
+    gap_limit = f**2 / (2.0 * acc)
+    new = np.ones(v.size, dtype=bool)
+    new[1:] = ((pos_a[1:] - np.maximum.accumulate(pos_b)[:-1] > np.minimum(gap_limit[1:],
+                                                                          gap_limit[:-1]))
+               | (barrier[first_move[1:]] != barrier[last_move[:-1]]))
+    zid = np.cumsum(new) - 1
+    starts = np.flatnonzero(new)
+    n_z = starts.size
+    # Time lost: braking from F into the zone's first slow point and accelerating back to F
+    # after its last; between slow points the machine never gets back to F; a capped block
+    # is crossed at most at its cap, from and to its neighbours' speeds.
+    last = np.append(starts[1:], v.size) - 1
+    edge = ((f[starts] - v[starts]) ** 2 + (f[last] - v[last]) ** 2) / (2.0 * acc * f[starts])
+    loss = np.zeros(v.size)
+    inner = np.flatnonzero(~new[1:])  # pairs (k, k + 1) inside one zone
+    if inner.size:
+        loss[inner] += _gap_loss(np.maximum(pos_a[inner + 1] - pos_b[inner], 0.0), v[inner],
+                                 v[inner + 1], np.minimum(f[inner], f[inner + 1]), acc)
+    el = np.flatnonzero(~is_j)
+    if el.size:
+        same_prev = np.zeros(v.size, dtype=bool)
+        same_prev[1:] = ~new[1:]
+        same_next = np.append(~new[1:], False)
+        v_in = np.where(same_prev[el], v[np.maximum(el - 1, 0)], v[el])
+        v_out = np.where(same_next[el], v[np.minimum(el + 1, v.size - 1)], v[el])
+        d = pos_b[el] - pos_a[el]
+        cap = v[el]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            at_cap = np.nan_to_num(d / cap - d / f[el], posinf=0.0)
+        # _gap_loss compares with running at the cap; add the cap's own loss against F.
+        loss[el] += _gap_loss(d, np.minimum(v_in, cap), np.minimum(v_out, cap), cap, acc) + at_cap
+    z_loss = np.bincount(zid, weights=loss, minlength=n_z) + edge
+    top = np.argsort(-z_loss, kind="stable")[:count]
+    ratio = v / f
     zones = []
-    for rank, r in enumerate(order, start=1):
-        a, b = int(starts[r]), int(ends[r])
-        sl = slice(a, b + 1)
-        # Candidates for the minimum: the blocks themselves and junctions a-1 .. b.
-        j_lo, j_hi = max(a - 1, 0), min(b, tp.n - 2)
-        js = jpos[j_lo : j_hi + 1] if tp.n > 1 else np.zeros(0, dtype=np.int64)
-        js = js[js >= 0]
-        ratio_el = ev.element_feed[sl] / tp.feed[sl]
-        k_el = int(np.argmin(ratio_el))
-        best_ratio, where = float(ratio_el[k_el]), ("element", a + k_el)
-        if js.size:
-            ratio_j = ev.junction_feed[js] / ev.junction_programmed[js]
-            k_j = int(np.argmin(ratio_j))
-            if ratio_j[k_j] < best_ratio:
-                best_ratio, where = float(ratio_j[k_j]), ("junction", int(js[k_j]))
-        if where[0] == "junction":
-            q = where[1]
-            cause = (f"{ev.indicator_names[ev.junction_indicator[q]]}: "
-                     f"{ev.labels[ev.junction_limit[q]]}")
-            min_feed = float(ev.junction_feed[q])
-            prog = float(ev.junction_programmed[q])
-            point = tp.end[ev.junction[q]]
+    for rank, z in enumerate(top, start=1):
+        sl = slice(starts[z], starts[z + 1] if z + 1 < n_z else v.size)
+        k = sl.start + int(np.argmin(ratio[sl]))
+        ind, lim = divmod(int(cause[k]), 10_000)
+        a_move, b_move = int(first_move[sl].min()), int(last_move[sl].max())
+        if is_j[k]:
+            point = tp.end[first_move[k]]
         else:
-            i = where[1]
-            ii = ev.element_indicator[i]
-            cause = (f"{ev.indicator_names[ii]}: {ev.labels[ev.element_limit[i]]}"
-                     if ii >= 0 else "programmed feed")
-            min_feed = float(ev.element_feed[i])
-            prog = float(tp.feed[i])
-            point = 0.5 * (tp.start[i] + tp.end[i])
-        zones.append(
-            Zone(
-                rank=rank,
-                first=a,
-                last=b,
-                line_first=int(tp.line[sl].min()),
-                line_last=int(tp.line[sl].max()),
-                length=float(tp.length[sl].sum()),
-                discontinuities=int(js.size),
-                worst_reduction=1.0 - best_ratio,
-                min_feed=min_feed,
-                programmed_feed=prog,
-                cause=cause,
-                score=float(score[r]),
-                point=(float(point[0]), float(point[1]), float(point[2])),
-            )
-        )
+            point = 0.5 * (tp.start[first_move[k]] + tp.end[first_move[k]])
+        zones.append(Zone(
+            rank=rank,
+            first=a_move,
+            last=b_move,
+            line_first=int(tp.line[a_move : b_move + 1].min()),
+            line_last=int(tp.line[a_move : b_move + 1].max()),
+            length=float(pos_b[sl].max() - pos_a[sl].min()),
+            discontinuities=int(is_j[sl].sum()),
+            capped_blocks=int((~is_j[sl]).sum()),
+            worst_reduction=float(1.0 - ratio[k]),
+            min_feed=float(v[k]),
+            programmed_feed=float(f[k]),
+            cause=f"{ev.indicator_names[ind]}: {ev.labels[lim]}",
+            time_lost=float(z_loss[z]),
+            point=(float(point[0]), float(point[1]), float(point[2])),
+        ))
     return tuple(zones)
 
 

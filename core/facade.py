@@ -91,6 +91,8 @@ class Ncperf:
         """(name, hooks it implements) for every registered plugin."""
         rows = []
         for name, plugin in sorted(self.pm.list_name_plugin(), key=lambda x: str(x[0])):
+            if plugin is None:  # blocked (NCPERF_DISABLE_PLUGINS)
+                continue
             hooks = sorted(c.name for c in self.pm.get_hookcallers(plugin) or [])
             rows.append((str(name), hooks))
         return rows

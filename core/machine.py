@@ -121,37 +121,50 @@ class Machine:
 
 
 # ---------------------------------------------------------------------------- loading
-def _line_of(text: str, key: str) -> int | None:
-    m = re.search(rf"^[ \t]*\"?{re.escape(key)}\"?[ \t]*=", text, flags=re.MULTILINE)
-    return text.count("\n", 0, m.start()) + 1 if m else None
-
-
 def _table_line(text: str, table: str) -> int | None:
     m = re.search(rf"^[ \t]*\[[ \t]*{re.escape(table)}[ \t]*\]", text, flags=re.MULTILINE)
     return text.count("\n", 0, m.start()) + 1 if m else None
 
 
+def _line_of(text: str, key: str, table: str = "") -> int | None:
+    """1-based line of ``key = ...`` inside ``[table]`` ("" for the top level)."""
+    start, end = 0, len(text)
+    if table:
+        head = re.search(rf"^[ \t]*\[[ \t]*{re.escape(table)}[ \t]*\]", text, flags=re.MULTILINE)
+        if head is None:
+            return None
+        start = head.end()
+    nxt = re.compile(r"^[ \t]*\[", flags=re.MULTILINE).search(text, start)
+    if nxt is not None:
+        end = nxt.start()
+    m = re.compile(rf"^[ \t]*\"?{re.escape(key)}\"?[ \t]*=", flags=re.MULTILINE).search(
+        text, start, end)
+    return text.count("\n", 0, m.start()) + 1 if m else None
+
+
 def _check_keys(
-    table: dict, expected: tuple[str, ...], where: str, source: str, text: str
+    table: dict, expected: tuple[str, ...], name: str, source: str, text: str
 ) -> None:
+    """Unknown and missing keys of ``[name]`` ("" for the top level)."""
+    where = f"[{name}]" if name else "the file"
     for key in table:
         if key not in expected:
             close = difflib.get_close_matches(key, expected, n=1)
-            hint = f"; did you mean '{close[0]}'?" if close else f"; expected one of {', '.join(expected)}"
-            raise MachineError(
-                f"unknown key '{key}' in {where}{hint}", source=source, line=_line_of(text, key)
-            )
+            hint = (f"; did you mean '{close[0]}'?" if close
+                    else f"; expected one of {', '.join(expected)}")
+            line = _line_of(text, key, name)
+            if line is None:  # a sub-table such as [axes.W]
+                line = _table_line(text, f"{name}.{key}" if name else key)
+            raise MachineError(f"unknown key '{key}' in {where}{hint}", source=source, line=line)
     for key in expected:
         if key not in table:
-            raise MachineError(
-                f"missing key '{key}' in {where}",
-                source=source,
-                line=_table_line(text, where.strip("[]")) if where.startswith("[") else None,
-            )
+            line = _table_line(text, name) if name else None
+            raise MachineError(f"missing key '{key}' in {where}", source=source, line=line)
 
 
-def _number(value: object, key: str, where: str, source: str, text: str) -> float:
-    line = _line_of(text, key)
+def _number(value: object, key: str, name: str, source: str, text: str) -> float:
+    where = f"[{name}]"
+    line = _line_of(text, key, name)
     if isinstance(value, bool) or not isinstance(value, int | float):
         raise MachineError(
             f"'{key}' in {where} must be a number, got {value!r}", source=source, line=line
@@ -175,7 +188,7 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         raise MachineError(
             f"not valid TOML: {msg}", source=source, line=int(m.group(1)) if m else None
         ) from None
-    _check_keys(data, TOP_KEYS, "the file", source, text)
+    _check_keys(data, TOP_KEYS, "", source, text)
     name = data["name"]
     if not isinstance(name, str) or not name.strip():
         raise MachineError("'name' must be a non-empty string", source=source,
@@ -183,22 +196,22 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
     axes = data["axes"]
     if not isinstance(axes, dict):
         raise MachineError("'axes' must be a table", source=source, line=_line_of(text, "axes"))
-    _check_keys(axes, AXES, "[axes]", source, text)
+    _check_keys(axes, AXES, "axes", source, text)
     per_axis: dict[str, list[float]] = {k: [] for k in AXIS_KEYS}
     for ax in AXES:
         table = axes[ax]
-        where = f"[axes.{ax}]"
+        tname = f"axes.{ax}"
         if not isinstance(table, dict):
-            raise MachineError(f"{where} must be a table", source=source)
-        _check_keys(table, tuple(AXIS_KEYS), where, source, text)
+            raise MachineError(f"[{tname}] must be a table", source=source)
+        _check_keys(table, tuple(AXIS_KEYS), tname, source, text)
         for key, factor in AXIS_KEYS.items():
-            per_axis[key].append(_number(table[key], key, where, source, text) * factor)
+            per_axis[key].append(_number(table[key], key, tname, source, text) * factor)
     ctrl = data["controller"]
     if not isinstance(ctrl, dict):
         raise MachineError("'controller' must be a table", source=source,
                            line=_line_of(text, "controller"))
-    _check_keys(ctrl, tuple(CONTROLLER_KEYS), "[controller]", source, text)
-    c = {k: _number(ctrl[k], k, "[controller]", source, text) * f
+    _check_keys(ctrl, tuple(CONTROLLER_KEYS), "controller", source, text)
+    c = {k: _number(ctrl[k], k, "controller", source, text) * f
          for k, f in CONTROLLER_KEYS.items()}
     return Machine(
         name=name.strip(),

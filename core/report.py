@@ -117,17 +117,19 @@ def summary(an: Analysis, *, machine_note: str = "") -> str:
             nk = int(np.count_nonzero(ev.element_indicator == k))
             if nk:
                 lines.append(f"  blocks capped    {nk:,} by {name}")
-    lines.append("  worst zones (path length x reduction; lines of the program):")
+    lines.append("  worst zones (slow points closer than the distance to regain F; ranked by the")
+    lines.append("  time they cost, each braked and left at the lowest axis acceleration):")
     if not ann.zones:
         lines.append("    none: no block or junction is predicted 10 % or more below F")
     else:
-        lines.append(f"    {'#':>2s}  {'lines':15s} {'length':>10s} {'disc.':>6s} {'worst':>6s} "
-                     f"{'min feed':>22s}  cause")
+        lines.append(f"    {'#':>2s}  {'lines':13s} {'extent':>9s} {'slow pts':>8s} {'worst':>6s} "
+                     f"{'min feed':>22s} {'cost':>8s}  cause")
         for z in ann.zones:
             feed = f"{z.min_feed * PER_MIN:,.0f} of F{z.programmed_feed * PER_MIN:,.0f}"
             lines.append(
-                f"    {z.rank:2d}  {z.lines:15s} {z.length:8.1f} mm {z.discontinuities:6d} "
-                f"{-z.worst_reduction * 100:5.0f}% {feed:>15s} mm/min  {z.cause}"
+                f"    {z.rank:2d}  {z.lines:13s} {z.length:6.1f} mm "
+                f"{z.discontinuities + z.capped_blocks:8d} {-z.worst_reduction * 100:5.0f}% "
+                f"{feed:>15s} mm/min {z.time_lost:6.2f} s  {z.cause}"
             )
     return "\n".join(lines)
 
@@ -169,9 +171,10 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
         "notices": [str(n) for n in tp.notices],
         "zones": [
             {"rank": z.rank, "line_start": z.line_first, "line_end": z.line_last,
-             "length_mm": round(z.length, 4), "discontinuities": z.discontinuities,
-             "worst_reduction": round(z.worst_reduction, 6),
-             "min_feed": round(z.min_feed * PER_MIN, 3), "cause": z.cause}
+             "extent_mm": round(z.length, 4), "discontinuities": z.discontinuities,
+             "capped_blocks": z.capped_blocks, "worst_reduction": round(z.worst_reduction, 6),
+             "min_feed": round(z.min_feed * PER_MIN, 3), "cause": z.cause,
+             "time_lost_s": round(z.time_lost, 4)}
             for z in an.annotations.zones
         ],
     }

@@ -1,0 +1,148 @@
+"""The ncperf command: outputs, exit codes, one-line errors, no partial files."""
+
+from __future__ import annotations
+
+import json
+import subprocess
+import sys
+import xml.etree.ElementTree as ET
+
+import pytest
+
+from core.cli import main
+from tests.conftest import ROOT
+
+PROGRAM = "G21 G90 G17 G64\nG0 X0 Y0 Z1\nG1 Z0 F6000\nG1 X10\nG1 Y10\nG1 X11\nG1 X12\nG1 X13\nM30\n"
+
+
+@pytest.fixture
+def program(tmp_path):
+    p = tmp_path / "part.nc"
+    p.write_text(PROGRAM)
+    return p
+
+
+def run(*args):
+    """The command in a fresh interpreter (exactly as a user runs it)."""
+    return subprocess.run([sys.executable, "-m", "core", *map(str, args)], capture_output=True,
+                          text=True, cwd=ROOT)
+
+
+def test_analyze_summary_json_and_svg(program, tmp_path, capsys):
+    """Summary on stdout; JSON with the documented keys; SVG that parses."""
+    js, svg = tmp_path / "r.json", tmp_path / "r.svg"
+    assert main(["analyze", str(program), "--json", str(js), "--svg", str(svg)]) == 0
+    out = capsys.readouterr().out
+    assert "preset siemens-840d, the default" in out
+    data = json.loads(js.read_text())
+    for key in ("program", "machine", "moves", "feed_length_mm", "programmed_time_s",
+                "junctions", "elements"):
+        assert key in data
+    assert data["moves"] == 7
+    # Z1 -> Z0 is 1 mm, X0 -> X10 10 mm, Y0 -> Y10 10 mm, then three 1 mm X steps: 24 mm.
+    assert data["feed_length_mm"] == pytest.approx(24.0)
+    # programmed time: 24 mm at 6000 mm/min = 100 mm/s -> 0.24 s
+    assert data["programmed_time_s"] == pytest.approx(0.24)
+    j = data["junctions"]
+    # corners: plunge -> X (line 3/4), X -> Y (4/5), Y -> X (5/6): 90 deg each
+    assert [(r["line"], r["next_line"]) for r in j] == [(3, 4), (4, 5), (5, 6)]
+    for r in j:
+        assert r["indicator"] == "tangential" and r["programmed_feed"] == 6000.0
+        assert r["reduction"] == pytest.approx(1 - r["predicted_feed"] / 6000.0, abs=1e-6)
+    # model 1 at 90 deg on the 840D preset (jerk binds): cbrt(5000 * 0.0241421^2) = 1.42837 mm/s
+    assert j[1]["predicted_feed"] == pytest.approx(1.4283691 * 60, rel=1e-6)
+    el = data["elements"]
+    assert [e["kind"] for e in el] == ["rapid"] + ["line"] * 6
+    # 1 mm blocks at F6000 with t_int 12 ms: L = 1.2 mm -> capped at 1/0.012 mm/s = 5000 mm/min
+    assert el[-1]["min_length_mm"] == pytest.approx(1.2)
+    assert el[-1]["predicted_feed"] == pytest.approx(5000.0)
+    assert el[2]["predicted_feed"] == 6000.0
+    ET.parse(svg)
+
+
+def test_analyze_feed_length_line(program, capsys):
+    """The summary's feed length is the sum of feed moves (24 mm here)."""
+    main(["analyze", str(program)])
+    assert "feed length      24.0 mm" in capsys.readouterr().out
+
+
+def test_demo_runs_without_a_program(tmp_path):
+    """`ncperf analyze` alone runs the bundled Z-level demo and writes an SVG."""
+    r = subprocess.run([sys.executable, "-m", "core", "analyze"], capture_output=True,
+                       text=True, cwd=tmp_path, env={"PYTHONPATH": str(ROOT), "PATH": ""})
+    assert r.returncode == 0, r.stderr
+    assert "zlevel_cavity.ngc" in r.stdout
+    ET.parse(tmp_path / "ncperf-demo.svg")
+
+
+def test_machines_and_plugins_commands():
+    """`ncperf machines` lists presets name first; `ncperf plugins` lists hooks."""
+    r = run("machines")
+    assert r.returncode == 0
+    names = [line.split("\t")[0] for line in r.stdout.splitlines()]
+    assert "siemens-840d" in names and "linuxcnc-sim" in names
+    r = run("plugins")
+    assert "plugins.tangential\tncperf_evaluate" in r.stdout
+    assert "adapters.gcode\tncperf_extract" in r.stdout
+
+
+@pytest.mark.parametrize(
+    "text,line,fragment",
+    [("", None, "empty file"),
+     ("G21 G1 X1 F60\nG1 X2 E5\n", 2, "unknown word E"),
+     ("G21 G1 X1 F60\nG1 X1.2.3\n", 2, "malformed number"),
+     ("G21 G1 X1 F60\nG1 X1" + "0" * 400 + "\n", 2, "number out of range"),
+     ("G21 G1 X0 Y0 F60\nG2 X1 Y0 I0 J0\n", 2, "arc with zero radius")],
+    ids=["empty", "unknown word", "malformed", "inf", "zero radius"],
+)
+def test_bad_input_one_line_exit_1_no_output(tmp_path, text, line, fragment):
+    """Bad input: exit 1, one line naming file (and line), no traceback, no output files."""
+    p = tmp_path / "bad.nc"
+    p.write_text(text)
+    js, svg = tmp_path / "o.json", tmp_path / "o.svg"
+    r = run("analyze", p, "--json", js, "--svg", svg)
+    assert r.returncode == 1
+    err = r.stderr.strip()
+    assert "\n" not in err and "Traceback" not in err
+    where = f"{p}:{line}:" if line else f"{p}:"
+    assert err.startswith(where) and fragment in err
+    assert not js.exists() and not svg.exists()
+    assert list(tmp_path.iterdir()) == [p]
+
+
+def test_binary_file(tmp_path):
+    """A binary file: exit 1, one line."""
+    p = tmp_path / "bin.nc"
+    p.write_bytes(bytes(range(256)) * 10)
+    r = run("analyze", p)
+    assert r.returncode == 1 and r.stderr.count("\n") == 1
+    assert "binary file" in r.stderr
+
+
+def test_missing_program_and_bad_machine(tmp_path, program):
+    """A missing file and a broken machine TOML are bad input (exit 1, one line)."""
+    r = run("analyze", tmp_path / "nope.nc")
+    assert r.returncode == 1 and "cannot read" in r.stderr
+    m = tmp_path / "m.toml"
+    m.write_text('name = "x"\n[axes.X]\nmax_feed = -1\n')
+    r = run("analyze", program, "--machine", m)
+    assert r.returncode == 1 and r.stderr.count("\n") == 1
+    assert f"{m}:" in r.stderr
+
+
+def test_usage_errors_exit_2(program, tmp_path):
+    """Unknown options, presets and missing output folders are usage errors (exit 2)."""
+    assert run("analyze", program, "--view", "top").returncode == 2
+    r = run("analyze", program, "--machine", "nonsense")
+    assert r.returncode == 2 and "unknown machine preset" in r.stderr
+    r = run("analyze", program, "--svg", tmp_path / "no" / "dir" / "x.svg")
+    assert r.returncode == 2 and "does not exist" in r.stderr
+    assert run().returncode == 2
+
+
+def test_views(program, tmp_path):
+    """--view xz|yz|iso write SVGs."""
+    for view in ("xz", "yz", "iso"):
+        out = tmp_path / f"{view}.svg"
+        assert main(["analyze", str(program), "--svg", str(out), "--view", view]) == 0
+        assert view in out.read_text().lower()

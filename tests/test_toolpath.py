@@ -1,0 +1,141 @@
+"""ToolPath columns and derived quantities, geometry helpers, zones."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from core import ToolPath
+from core.annotations import build_annotations, find_zones
+from core.toolpath import MoveKind, drop_zero_length, empty_columns, polyline
+from tests.conftest import machine, path
+
+
+def test_columns_are_checked_with_their_shapes():
+    """Wrong column shapes raise with the expected and the actual shape."""
+    cols = empty_columns(3)
+    cols["start"] = np.zeros((2, 3))
+    with pytest.raises(ValueError, match=r"start must have shape \(3, 3\), got \(2, 3\)"):
+        ToolPath(**cols)
+    cols = empty_columns(3)
+    cols["op_offsets"] = np.array([0, 2])
+    with pytest.raises(ValueError, match="op_offsets must rise from 0 to 3"):
+        ToolPath(**cols)
+
+
+def test_line_lengths_tangents_and_turn_angles():
+    """A 3-4-5 triangle: lengths 3, 4, 5; turns 90 deg and 180 - 36.87 deg."""
+    tp = polyline([[0, 0, 0], [3, 0, 0], [3, 4, 0], [0, 0, 0]], 10.0)
+    assert np.allclose(tp.length, [3, 4, 5])
+    assert np.allclose(tp.tangent_start[2], [-0.6, -0.8, 0])
+    # at (3, 4) the path turns from (0, 1) to (-0.6, -0.8): the triangle's angle there is
+    # atan(3/4) = 36.87 deg, so the direction changes by 143.13 deg
+    assert np.degrees(tp.turn_angle) == pytest.approx([90.0, 180 - math.degrees(math.atan2(3, 4))])
+    assert list(tp.junctions) == [0, 1]
+    assert tp.feed_length == 12.0 and tp.programmed_time == pytest.approx(1.2)
+
+
+def test_arc_derived_quantities():
+    """Quarter arc R 5 ccw: length 7.854, tangents rotate by 90 deg, curvature +0.2."""
+    tp = path([{"end": (5, 5, 0), "center": (0, 5, 0), "ccw": True}])
+    assert tp.length[0] == pytest.approx(2.5 * math.pi)
+    assert np.allclose(tp.tangent_start[0], [1, 0, 0]) and np.allclose(tp.tangent_end[0], [0, 1, 0])
+    assert tp.curvature[0] == pytest.approx(0.2)
+    assert np.allclose(tp.curvature_vector_start[0], [0, 0.2, 0])  # towards the centre
+    assert np.allclose(tp.curvature_vector_end[0], [-0.2, 0, 0])
+
+
+def test_curvature_jump_signs():
+    """Line -> arc 1/R; same-way arcs |1/R1 - 1/R2|; inflection 1/R1 + 1/R2."""
+    tp = path([{"end": (10, 0, 0)},
+               {"end": (20, 10, 0), "center": (10, 10, 0), "ccw": True},
+               {"end": (15, 15, 0), "center": (15, 10, 0), "ccw": True},
+               {"end": (10, 20, 0), "center": (15, 20, 0), "ccw": False}])
+    assert tp.curvature_jump == pytest.approx([0.1, 0.1, 0.4])
+
+
+def test_junctions_break_at_rapids_and_operations():
+    """No junction next to a rapid, nor across an operation boundary."""
+    cols = empty_columns(4)
+    cols["end"] = np.array([[1, 0, 0], [2, 0, 0], [3, 0, 0], [4, 0, 0]], dtype=float)
+    cols["start"] = np.concatenate([[[0, 0, 0]], cols["end"][:-1]])
+    cols["feed"][:] = 10.0
+    cols["kind"][1] = MoveKind.RAPID
+    cols["feed"][1] = np.nan
+    assert list(ToolPath(**cols).junctions) == [2]
+    cols["op_offsets"] = np.array([0, 3, 4])
+    assert list(ToolPath(**cols).junctions) == []
+
+
+def test_drop_zero_length_keeps_stops_and_operations():
+    """Zero-length moves go; their dwell moves to the move before; operations stay aligned."""
+    cols = empty_columns(4)
+    pts = np.array([[0, 0, 0], [1, 0, 0], [1, 0, 0], [2, 0, 0], [3, 0, 0]], dtype=float)
+    cols["start"], cols["end"] = pts[:-1], pts[1:]
+    cols["feed"][:] = 10.0
+    cols["dwell"][1] = 2.0
+    cols["op_offsets"] = np.array([0, 2, 4])
+    tp, removed = drop_zero_length(ToolPath(**cols))
+    assert list(removed) == [1]
+    assert tp.n == 3 and list(tp.dwell) == [2.0, 0.0, 0.0]
+    assert list(tp.op_offsets) == [0, 1, 3]
+
+
+def test_zones_merge_close_corners_and_rank_by_time_lost(models):
+    """Two 90 deg corners 0.5 mm apart are one zone (regain distance F^2/2A = 2 mm); a third
+    corner 20 mm away is another. Times lost worked out by hand."""
+    # F = 100 mm/s, A = 2500 mm/s^2: F^2 / (2 A) = 2 mm. Three 90 deg corners: (10,0) left
+    # turn, (10,0.5) right turn, (30,0.5) left turn. Jerk large, so each corner runs at
+    # sqrt(A R), R = 0.0241421: v = 7.768870 mm/s. (The 0.5 mm block is shorter than
+    # L = 1.2 mm, capped at 41.67 mm/s, more than the 36.2 mm/s acceleration allows there.)
+    tp = path([{"end": (10, 0, 0)}, {"end": (10, 0.5, 0)}, {"end": (30, 0.5, 0)},
+               {"end": (30, 20.5, 0)}], feed=100.0)
+    ev = models.evaluate(tp, machine(jerk=(1e6, 1e6, 1e6)))
+    v = math.sqrt(2500 * 0.0241421356237)
+    F, A = 100.0, 2500.0
+    zones = find_zones(ev)
+    assert len(zones) == 2
+    pair, single = zones  # the pair costs more
+    assert (pair.line_first, pair.line_last) == (1, 3)
+    assert pair.discontinuities == 2 and pair.capped_blocks == 1
+    assert pair.length == pytest.approx(0.5)
+    # single corner: brake F -> v and back: (F - v)^2 / (A F)
+    assert single.time_lost == pytest.approx((F - v) ** 2 / (A * F), rel=1e-9)
+    # pair: brake into the first, leave the second, and the 0.5 mm between at most at
+    # peak sqrt(A d + v^2) = sqrt(1250 + 60.355) = 36.199 mm/s (below F):
+    # ramps 2 (peak - v) / A, no cruise; minus 0.5 / F.
+    peak = math.sqrt(A * 0.5 + v * v)
+    gap = 2 * (peak - v) / A - 0.5 / F
+    assert pair.time_lost == pytest.approx((F - v) ** 2 / (A * F) + gap, rel=1e-9)
+    assert pair.worst_reduction == pytest.approx(1 - v / F)
+    assert pair.cause.startswith("tangential: acceleration")
+
+
+def test_annotations_classes():
+    """Move classes from each block's own reduction; junction classes from theirs."""
+    from core import Ncperf, make_plugin_manager
+    from tests.conftest import MODELS
+
+    nc = Ncperf(make_plugin_manager(builtins=MODELS, entry_points=False))
+    # 1 mm blocks at 10 m/min on t_int 12 ms: 50 % -> class 3 ("50-70 %" starts at 50 %).
+    tp = polyline([[i, 0, 0] for i in range(4)], 10000 / 60)
+    ann = build_annotations(nc.evaluate(tp, machine()))
+    assert list(ann.move_class) == [3, 3, 3]
+    assert list(ann.length_class) == [0, 0, 0]
+
+
+def test_zone_of_capped_blocks(models):
+    """20 collinear 1 mm blocks at 10 m/min, t_int 12 ms: one zone, all capped at 5 m/min."""
+    # F = 166.667 mm/s, cap = 83.333 mm/s, A = 2500 mm/s^2.
+    # Entry and exit: 2 (F - cap)^2 / (2 A F) = 83.333^2 / (2500 * 166.667) = 0.0166667 s;
+    # each block: 1/83.333 - 1/166.667 = 0.006 s, 20 of them 0.12 s. Total 0.1366667 s.
+    tp = polyline([[i, 0, 0] for i in range(21)], 10000 / 60)
+    zones = find_zones(models.evaluate(tp, machine()))
+    assert len(zones) == 1
+    z = zones[0]
+    assert (z.capped_blocks, z.discontinuities) == (20, 0)
+    assert z.length == pytest.approx(20.0)
+    assert z.time_lost == pytest.approx(0.1366667, rel=1e-6)
+    assert z.cause == "ncu_capacity: block time"
