@@ -50,7 +50,7 @@ def test_analyze_summary_json_and_svg(program, tmp_path, capsys):
         assert r["indicator"] == "tangential" and r["programmed_feed"] == 6000.0
         assert r["reduction"] == pytest.approx(1 - r["predicted_feed"] / 6000.0, abs=1e-6)
     # model 1 at 90 deg on the 840D preset (jerk binds): cbrt(5000 * 0.0241421^2) = 1.42837 mm/s
-    assert j[1]["predicted_feed"] == pytest.approx(1.4283691 * 60, rel=1e-6)
+    assert j[1]["predicted_feed"] == pytest.approx(1.4283691 * 60, abs=1e-3)  # JSON: 3 decimals
     el = data["elements"]
     assert [e["kind"] for e in el] == ["rapid"] + ["line"] * 6
     # 1 mm blocks at F6000 with t_int 12 ms: L = 1.2 mm -> capped at 1/0.012 mm/s = 5000 mm/min
