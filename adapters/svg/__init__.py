@@ -1,0 +1,45 @@
+"""A3: the SVG fallback display, the paper's Figures 10 and 11 in one file.
+
+Recognises ``.svg`` targets: a path (``str`` or ``os.PathLike``, drawn in the
+top view) or a :class:`~core.annotations.FileTarget` (its own view). The
+drawing itself is in :mod:`adapters.svg.render`.
+"""
+
+from __future__ import annotations
+
+import os
+
+from adapters.svg.render import render_svg, write_svg
+from core import Annotations, FileTarget, ToolPath, hookimpl
+
+__all__ = ["ncperf_display", "render_svg", "svg_target", "write_svg"]
+
+
+def svg_target(target: object) -> tuple[str, str] | None:
+    """(path, view) if ``target`` is an SVG file, else None.
+
+    Parameters
+    ----------
+    target : str, os.PathLike or FileTarget
+        A name ending in ``.svg`` (any case); a FileTarget brings its view.
+    """
+    if isinstance(target, FileTarget):
+        path, view = target.path, target.view
+    elif isinstance(target, str | os.PathLike):
+        path, view = target, "xy"
+    else:
+        return None
+    name = os.fspath(path)
+    if not isinstance(name, str) or not name.lower().endswith(".svg"):
+        return None
+    return name, view
+
+
+@hookimpl
+def ncperf_display(toolpath: ToolPath, annotations: Annotations, target: object) -> str | None:
+    """Write the annotations to an ``.svg`` target; None for any other target."""
+    found = svg_target(target)
+    if found is None:
+        return None
+    path, view = found
+    return write_svg(toolpath, annotations, path, view)
