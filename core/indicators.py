@@ -85,8 +85,10 @@ class Indicator:
                 raise ValueError(f"{name} must have shape ({m},), got {a.shape}")
         if m and (limit.min() < 0 or limit.max() >= len(self.labels)):
             raise ValueError(f"limit codes must index labels (0..{len(self.labels) - 1})")
-        if m and np.unique(idx).size != m:
-            raise ValueError(f"indicator {self.name!r} has repeated {self.at} indices")
+        if m > 1:
+            d = np.diff(idx)
+            if (d <= 0).any() and (np.diff(np.sort(idx)) == 0).any():
+                raise ValueError(f"indicator {self.name!r} has repeated {self.at} indices")
         for k, v in self.values.items():
             if np.shape(v) != (m,):
                 raise ValueError(f"values[{k!r}] must have shape ({m},), got {np.shape(v)}")
@@ -191,15 +193,23 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         )
 
     def lowest(kind: str) -> tuple[NDArray, NDArray, NDArray, NDArray]:
-        if not parts[kind]:
-            z = np.zeros(0, dtype=np.int64)
-            return z, np.zeros(0), z, z
-        idx, feed, ind, lim = (np.concatenate(c) for c in zip(*parts[kind], strict=True))
-        order = np.lexsort((feed, idx))
-        idx, feed, ind, lim = idx[order], feed[order], ind[order], lim[order]
-        first = np.ones(idx.size, dtype=bool)
-        first[1:] = idx[1:] != idx[:-1]
-        return idx[first], feed[first], ind[first], lim[first]
+        # Dense passes over the junctions (or elements), no sort: the first indicator to
+        # report a place claims it (so a record with no limit, feed inf, still names its
+        # indicator), then any lower feed takes it over; ties keep the earlier indicator.
+        size = max(tp.n - 1, 0) if kind == "junction" else tp.n
+        feed = np.full(size, np.inf)
+        ind = np.full(size, -1, dtype=np.int64)
+        lim = np.zeros(size, dtype=np.int64)
+        for idx, f, i, lab in parts[kind]:
+            new = ind[idx] < 0
+            sel = idx[new]
+            feed[sel], ind[sel], lim[sel] = f[new], i[new], lab[new]
+        for idx, f, i, lab in parts[kind]:
+            better = f < feed[idx]
+            sel = idx[better]
+            feed[sel], ind[sel], lim[sel] = f[better], i[better], lab[better]
+        where = np.flatnonzero(ind >= 0)
+        return where, feed[where], ind[where], lim[where]
 
     j, jfeed, jind, jlim = lowest("junction")
     jprog = np.fmin(tp.feed[j], tp.feed[j + 1])

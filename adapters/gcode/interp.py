@@ -70,6 +70,8 @@ def detect_dialect(path: str, words: Words) -> str:
 
 def _ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> NDArray:
     """Forward-fill ``values`` from the positions where ``is_set``; ``initial`` before the first."""
+    if not is_set.any():
+        return np.full(values.shape, initial, dtype=np.result_type(values, type(initial)))
     idx = np.where(is_set, np.arange(values.size), -1)
     np.maximum.accumulate(idx, out=idx)
     out = values[np.maximum(idx, 0)]

@@ -182,17 +182,19 @@ def tokenize(src: Source) -> Words:
         buf[a:b] = 0
     c = buf[buf != 0]
     del buf
+    if c.size == 0 or c[-1] != LF:
+        c = np.append(c, np.uint8(LF))  # every word then ends at a break
 
     is_letter = _LETTER[c]
     is_lf = c == LF
     brk_mask = is_letter | is_lf
     brk = np.flatnonzero(brk_mask)
     lf_at = is_lf[brk]
-    line_at_brk = np.cumsum(lf_at) - lf_at  # newlines before each break = its line
+    line_at_brk = np.cumsum(lf_at, dtype=np.int64) - lf_at  # newlines before each break
     lfpos = brk[lf_at]
     rank = np.flatnonzero(~lf_at)
     lpos = brk[rank]
-    span_end = np.append(brk, c.size)[rank + 1]
+    span_end = brk[rank + 1]  # c ends with a newline, so every letter has a next break
     wline = line_at_brk[rank].astype(np.int64)
     empty = span_end == lpos + 1
 
@@ -221,12 +223,14 @@ def tokenize(src: Source) -> Words:
         if attempt:  # pragma: no cover - the validation below finds every bad span
             raise AssertionError("G-code lexer: numbers could not be aligned with words")
         bad.update(np.unique(wline[want & ~_well_formed(c, lpos + 1, span_end)]).tolist())
-    ok = want
     if bad:
         special[np.array(sorted(bad), dtype=np.int64)] = True
-
-    line, letter, value = wline[ok], c[lpos[ok]], values[ok]
-    bare = _bare_integers(c, lpos[ok] + 1, span_end[ok], letter, value)
+    if want.all():
+        line, letter, value, s, e = wline, c[lpos], values, lpos + 1, span_end
+    else:
+        line, letter, value = wline[want], c[lpos[want]], values[want]
+        s, e = lpos[want] + 1, span_end[want]
+    bare = _bare_integers(c, s, e, letter, value)
 
     result = Words(line=line, letter=letter, value=value, bare=bare, n_lines=src.n_lines)
     sp = np.flatnonzero(special)
