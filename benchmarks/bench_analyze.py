@@ -38,9 +38,12 @@ def run_cli(program: Path, svg: Path) -> tuple[float, float]:
     """Wall time (s) and peak RSS (MB) of one ``ncperf analyze`` process."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     t0 = time.perf_counter()
-    proc = subprocess.Popen([sys.executable, "-m", "core", "analyze", str(program), "--svg",
-                             str(svg)], stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
-                            env=env)
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "core", "analyze", str(program), "--svg", str(svg)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+    )
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t0
     if status != 0:
@@ -83,9 +86,11 @@ def main() -> None:
         gen = tmp / "finishing.nc"
         n = generate(str(gen), args.moves)
         programs.append((f"generated raster ({n:,} moves)", gen))
-        print(f"ncperf analyze PROGRAM --svg OUT, {datetime.date.today()}, "
-              f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
-              f"{os.cpu_count()} cores; best / median of {args.runs} runs")
+        print(
+            f"ncperf analyze PROGRAM --svg OUT, {datetime.date.today()}, "
+            f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+            f"{os.cpu_count()} cores; best / median of {args.runs} runs"
+        )
         print()
         print("| program | moves | wall best [s] | wall median [s] | peak RSS [MB] | SVG [MB] |")
         print("|---|---|---|---|---|---|")
@@ -97,8 +102,10 @@ def main() -> None:
                 walls.append(w)
                 rss.append(r)
             st = stages(prog, svg)
-            print(f"| {name} | {st['moves']:,} | {min(walls):.2f} | {statistics.median(walls):.2f} "
-                  f"| {max(rss):.0f} | {svg.stat().st_size / 1e6:.1f} |")
+            print(
+                f"| {name} | {st['moves']:,} | {min(walls):.2f} | {statistics.median(walls):.2f} "
+                f"| {max(rss):.0f} | {svg.stat().st_size / 1e6:.1f} |"
+            )
             programs_stages = st
         print()
         print("Stages of the last program, one in-process run:")

@@ -206,20 +206,24 @@ def find_zones(ev: Evaluation, count: int = 10) -> tuple[Zone, ...]:
     if v.size == 0:
         return ()
     is_j = np.arange(v.size) < n_j
-    cause = np.concatenate([
-        ev.junction_indicator[jsel] * 10_000 + ev.junction_limit[jsel],
-        ev.element_indicator[esel] * 10_000 + ev.element_limit[esel]])
+    cause = np.concatenate(
+        [
+            ev.junction_indicator[jsel] * 10_000 + ev.junction_limit[jsel],
+            ev.element_indicator[esel] * 10_000 + ev.element_limit[esel],
+        ]
+    )
 
     order = np.lexsort((pos_b, pos_a))
     (first_move, last_move, pos_a, pos_b, v, f, is_j, cause) = (
-        x[order] for x in (first_move, last_move, pos_a, pos_b, v, f, is_j, cause))
+        x[order] for x in (first_move, last_move, pos_a, pos_b, v, f, is_j, cause)
+    )
     # A rapid or operation change between two events breaks the zone.
     barrier = np.cumsum(~tp.is_feed) + tp.op_index * (tp.n + 1)
     gap_limit = f**2 / (2.0 * acc)
     new = np.ones(v.size, dtype=bool)
-    new[1:] = ((pos_a[1:] - np.maximum.accumulate(pos_b)[:-1] > np.minimum(gap_limit[1:],
-                                                                          gap_limit[:-1]))
-               | (barrier[first_move[1:]] != barrier[last_move[:-1]]))
+    new[1:] = (
+        pos_a[1:] - np.maximum.accumulate(pos_b)[:-1] > np.minimum(gap_limit[1:], gap_limit[:-1])
+    ) | (barrier[first_move[1:]] != barrier[last_move[:-1]])
     zid = np.cumsum(new) - 1
     starts = np.flatnonzero(new)
     n_z = starts.size
@@ -231,8 +235,13 @@ def find_zones(ev: Evaluation, count: int = 10) -> tuple[Zone, ...]:
     loss = np.zeros(v.size)
     inner = np.flatnonzero(~new[1:])  # pairs (k, k + 1) inside one zone
     if inner.size:
-        loss[inner] += _gap_loss(np.maximum(pos_a[inner + 1] - pos_b[inner], 0.0), v[inner],
-                                 v[inner + 1], np.minimum(f[inner], f[inner + 1]), acc)
+        loss[inner] += _gap_loss(
+            np.maximum(pos_a[inner + 1] - pos_b[inner], 0.0),
+            v[inner],
+            v[inner + 1],
+            np.minimum(f[inner], f[inner + 1]),
+            acc,
+        )
     el = np.flatnonzero(~is_j)
     if el.size:
         same_prev = np.zeros(v.size, dtype=bool)
@@ -259,22 +268,24 @@ def find_zones(ev: Evaluation, count: int = 10) -> tuple[Zone, ...]:
             point = tp.end[first_move[k]]
         else:
             point = 0.5 * (tp.start[first_move[k]] + tp.end[first_move[k]])
-        zones.append(Zone(
-            rank=rank,
-            first=a_move,
-            last=b_move,
-            line_first=int(tp.line[a_move : b_move + 1].min()),
-            line_last=int(tp.line[a_move : b_move + 1].max()),
-            length=float(pos_b[sl].max() - pos_a[sl].min()),
-            discontinuities=int(is_j[sl].sum()),
-            capped_blocks=int((~is_j[sl]).sum()),
-            worst_reduction=float(1.0 - ratio[k]),
-            min_feed=float(v[k]),
-            programmed_feed=float(f[k]),
-            cause=f"{ev.indicator_names[ind]}: {ev.labels[lim]}",
-            time_lost=float(z_loss[z]),
-            point=(float(point[0]), float(point[1]), float(point[2])),
-        ))
+        zones.append(
+            Zone(
+                rank=rank,
+                first=a_move,
+                last=b_move,
+                line_first=int(tp.line[a_move : b_move + 1].min()),
+                line_last=int(tp.line[a_move : b_move + 1].max()),
+                length=float(pos_b[sl].max() - pos_a[sl].min()),
+                discontinuities=int(is_j[sl].sum()),
+                capped_blocks=int((~is_j[sl]).sum()),
+                worst_reduction=float(1.0 - ratio[k]),
+                min_feed=float(v[k]),
+                programmed_feed=float(f[k]),
+                cause=f"{ev.indicator_names[ind]}: {ev.labels[lim]}",
+                time_lost=float(z_loss[z]),
+                point=(float(point[0]), float(point[1]), float(point[2])),
+            )
+        )
     return tuple(zones)
 
 
@@ -282,8 +293,9 @@ def length_class(ev: Evaluation) -> NDArray[np.int8]:
     """(n,) Figure-10 class of each block: 0 below L, 1 from L to 2 L, 2 above; -1 rapids."""
     tp = ev.toolpath
     ratio = tp.length / ev.min_length
-    cls = np.searchsorted(np.array([1.0, 2.0]), np.nan_to_num(ratio, nan=np.inf),
-                          side="right").astype(np.int8)
+    cls = np.searchsorted(
+        np.array([1.0, 2.0]), np.nan_to_num(ratio, nan=np.inf), side="right"
+    ).astype(np.int8)
     return np.where(tp.is_feed, cls, -1).astype(np.int8)
 
 

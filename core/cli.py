@@ -44,15 +44,24 @@ def _parser() -> argparse.ArgumentParser:
     a = sub.add_parser("analyze", help="predicted feed reduction of a program, and why")
     a.add_argument("program", nargs="?", help="tool path file (G-code); none: the bundled demo")
     a.add_argument("--demo", action="store_true", help="run on the bundled Z-level demo program")
-    a.add_argument("--machine", metavar="PRESET|FILE",
-                   help=f"machine preset name or TOML file (default: {DEFAULT_PRESET})")
+    a.add_argument(
+        "--machine",
+        metavar="PRESET|FILE",
+        help=f"machine preset name or TOML file (default: {DEFAULT_PRESET})",
+    )
     a.add_argument("--svg", metavar="OUT", help="write the coloured tool path as SVG")
     a.add_argument("--json", metavar="OUT", help="write junctions and elements as JSON")
     a.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
-    a.add_argument("--dialect", choices=("fanuc", "siemens", "linuxcnc"),
-                   help="G-code dialect (default: from the file)")
-    a.add_argument("--block-delete", action="store_true",
-                   help="skip blocks starting with '/' (block-delete switch on)")
+    a.add_argument(
+        "--dialect",
+        choices=("fanuc", "siemens", "linuxcnc"),
+        help="G-code dialect (default: from the file)",
+    )
+    a.add_argument(
+        "--block-delete",
+        action="store_true",
+        help="skip blocks starting with '/' (block-delete switch on)",
+    )
 
     sub.add_parser("machines", help="list machine presets (the names --machine takes)")
     sub.add_parser("plugins", help="list registered plugins and the hooks they implement")
@@ -85,8 +94,9 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     machine = resolve_machine(args.machine)
     note = "" if args.machine else f" [preset {DEFAULT_PRESET}, the default; --machine to choose]"
     nc = Ncperf()
-    analysis = nc.analyze(program, machine,
-                          ExtractOptions(dialect=args.dialect, block_delete=args.block_delete))
+    analysis = nc.analyze(
+        program, machine, ExtractOptions(dialect=args.dialect, block_delete=args.block_delete)
+    )
     _print_notices(analysis.toolpath.notices, sys.stderr)
     print(summary(analysis, machine_note=note))
     if svg:

@@ -37,8 +37,10 @@ class Ncperf:
         """Read a tool path; UsageError when no adapter recognises the source."""
         tp = self.pm.hook.ncperf_extract(source=source, options=options or ExtractOptions())
         if tp is None:
-            raise UsageError(f"{source}: no adapter recognises this source "
-                             f"(adapters: {', '.join(self.implementers('ncperf_extract'))})")
+            raise UsageError(
+                f"{source}: no adapter recognises this source "
+                f"(adapters: {', '.join(self.implementers('ncperf_extract'))})"
+            )
         if not isinstance(tp, ToolPath):
             raise TypeError(f"ncperf_extract returned {type(tp).__name__}, not ToolPath")
         return tp
@@ -61,22 +63,29 @@ class Ncperf:
     # A3
     def display(self, toolpath: ToolPath, annotations: Annotations, target: object) -> object:
         """Draw annotations on a target; UsageError when no display handles it."""
-        out = self.pm.hook.ncperf_display(toolpath=toolpath, annotations=annotations,
-                                          target=target)
+        out = self.pm.hook.ncperf_display(toolpath=toolpath, annotations=annotations, target=target)
         if out is None:
-            raise UsageError(f"{target}: no display handles this target "
-                             f"(displays: {', '.join(self.implementers('ncperf_display'))})")
+            raise UsageError(
+                f"{target}: no display handles this target "
+                f"(displays: {', '.join(self.implementers('ncperf_display'))})"
+            )
         return out
 
     # A1 -> A2 (-> A3)
-    def analyze(self, source: object, machine: Machine,
-                options: ExtractOptions | None = None) -> Analysis:
+    def analyze(
+        self, source: object, machine: Machine, options: ExtractOptions | None = None
+    ) -> Analysis:
         tp = self.extract(source, options)
         ev = self.evaluate(tp, machine)
         return Analysis(tp, ev, build_annotations(ev))
 
-    def run(self, source: object, machine: Machine, target: object,
-            options: ExtractOptions | None = None) -> tuple[Analysis, object]:
+    def run(
+        self,
+        source: object,
+        machine: Machine,
+        target: object,
+        options: ExtractOptions | None = None,
+    ) -> tuple[Analysis, object]:
         """The paper's Figure 5: extract, evaluate, display."""
         analysis = self.analyze(source, machine, options)
         return analysis, self.display(analysis.toolpath, analysis.annotations, target)
@@ -84,8 +93,10 @@ class Ncperf:
     # introspection
     def implementers(self, hook: str) -> list[str]:
         caller = getattr(self.pm.hook, hook)
-        return [self.pm.get_name(impl.plugin) or repr(impl.plugin)
-                for impl in reversed(caller.get_hookimpls())]
+        return [
+            self.pm.get_name(impl.plugin) or repr(impl.plugin)
+            for impl in reversed(caller.get_hookimpls())
+        ]
 
     def plugins(self) -> list[tuple[str, list[str]]]:
         """(name, hooks it implements) for every registered plugin."""

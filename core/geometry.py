@@ -54,8 +54,9 @@ def angle_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.
     return np.arctan2(norm(np.cross(a, b)), dot(a, b))
 
 
-def radial(points: NDArray[np.float64], center: NDArray[np.float64],
-           normal: NDArray[np.float64]) -> NDArray[np.float64]:
+def radial(
+    points: NDArray[np.float64], center: NDArray[np.float64], normal: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """In-plane vector from the centre to each point (normal component removed)."""
     r = points - center
     return r - dot(r, normal)[:, None] * normal
@@ -103,20 +104,29 @@ def arc_sweep(
     return theta
 
 
-def arc_pitch(start: NDArray[np.float64], end: NDArray[np.float64],
-              normal: NDArray[np.float64], sweep: NDArray[np.float64]) -> NDArray[np.float64]:
+def arc_pitch(
+    start: NDArray[np.float64],
+    end: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    sweep: NDArray[np.float64],
+) -> NDArray[np.float64]:
     """Helix rise per radian along the normal (mm/rad); 0 for planar arcs."""
     return dot(end - start, normal) / sweep
 
 
-def arc_length(radius: NDArray[np.float64], sweep: NDArray[np.float64],
-               pitch: NDArray[np.float64]) -> NDArray[np.float64]:
+def arc_length(
+    radius: NDArray[np.float64], sweep: NDArray[np.float64], pitch: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Length of helical arcs: sweep * sqrt(r^2 + c^2) with c the pitch per radian."""
     return sweep * np.hypot(radius, pitch)
 
 
-def arc_tangent(rvec: NDArray[np.float64], normal: NDArray[np.float64],
-                ccw: NDArray[np.bool_], pitch: NDArray[np.float64]) -> NDArray[np.float64]:
+def arc_tangent(
+    rvec: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    ccw: NDArray[np.bool_],
+    pitch: NDArray[np.float64],
+) -> NDArray[np.float64]:
     """Unit tangent of helical arcs at the point with in-plane radius vector ``rvec``.
 
     d/dphi of c + Rot(s phi) r0 + c_p phi n is s n x r + c_p n, with s = +1 for

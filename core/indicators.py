@@ -176,14 +176,16 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     names: list[str] = []
     label_id: dict[str, int] = {PROGRAMMED: 0}
     parts: dict[str, list[tuple[NDArray, NDArray, NDArray, NDArray]]] = {
-        "junction": [], "element": []
+        "junction": [],
+        "element": [],
     }
     for ind in indicators:
         if ind.name not in names:
             names.append(ind.name)
         nid = names.index(ind.name)
-        codes = np.array([label_id.setdefault(lab, len(label_id)) for lab in ind.labels],
-                         dtype=np.int64)
+        codes = np.array(
+            [label_id.setdefault(lab, len(label_id)) for lab in ind.labels], dtype=np.int64
+        )
         limit = codes[ind.limit] if ind.index.size else np.zeros(0, dtype=np.int64)
         bound = tp.n - 1 if ind.at == "junction" else tp.n
         if ind.index.size and (ind.index.min() < 0 or ind.index.max() >= bound):
@@ -239,6 +241,7 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         element_feed=efeed,
         element_indicator=eind,
         element_limit=elim,
-        min_length=np.where(tp.is_feed, min_block_length(tp.feed, machine.interpolation_time),
-                            np.nan),
+        min_length=np.where(
+            tp.is_feed, min_block_length(tp.feed, machine.interpolation_time), np.nan
+        ),
     )

@@ -138,20 +138,22 @@ def _line_of(text: str, key: str, table: str = "") -> int | None:
     if nxt is not None:
         end = nxt.start()
     m = re.compile(rf"^[ \t]*\"?{re.escape(key)}\"?[ \t]*=", flags=re.MULTILINE).search(
-        text, start, end)
+        text, start, end
+    )
     return text.count("\n", 0, m.start()) + 1 if m else None
 
 
-def _check_keys(
-    table: dict, expected: tuple[str, ...], name: str, source: str, text: str
-) -> None:
+def _check_keys(table: dict, expected: tuple[str, ...], name: str, source: str, text: str) -> None:
     """Unknown and missing keys of ``[name]`` ("" for the top level)."""
     where = f"[{name}]" if name else "the file"
     for key in table:
         if key not in expected:
             close = difflib.get_close_matches(key, expected, n=1)
-            hint = (f"; did you mean '{close[0]}'?" if close
-                    else f"; expected one of {', '.join(expected)}")
+            hint = (
+                f"; did you mean '{close[0]}'?"
+                if close
+                else f"; expected one of {', '.join(expected)}"
+            )
             line = _line_of(text, key, name)
             if line is None:  # a sub-table such as [axes.W]
                 line = _table_line(text, f"{name}.{key}" if name else key)
@@ -191,8 +193,9 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
     _check_keys(data, TOP_KEYS, "", source, text)
     name = data["name"]
     if not isinstance(name, str) or not name.strip():
-        raise MachineError("'name' must be a non-empty string", source=source,
-                           line=_line_of(text, "name"))
+        raise MachineError(
+            "'name' must be a non-empty string", source=source, line=_line_of(text, "name")
+        )
     axes = data["axes"]
     if not isinstance(axes, dict):
         raise MachineError("'axes' must be a table", source=source, line=_line_of(text, "axes"))
@@ -208,11 +211,11 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
             per_axis[key].append(_number(table[key], key, tname, source, text) * factor)
     ctrl = data["controller"]
     if not isinstance(ctrl, dict):
-        raise MachineError("'controller' must be a table", source=source,
-                           line=_line_of(text, "controller"))
+        raise MachineError(
+            "'controller' must be a table", source=source, line=_line_of(text, "controller")
+        )
     _check_keys(ctrl, tuple(CONTROLLER_KEYS), "controller", source, text)
-    c = {k: _number(ctrl[k], k, "controller", source, text) * f
-         for k, f in CONTROLLER_KEYS.items()}
+    c = {k: _number(ctrl[k], k, "controller", source, text) * f for k, f in CONTROLLER_KEYS.items()}
     return Machine(
         name=name.strip(),
         max_feed=np.array(per_axis["max_feed"]),

@@ -25,7 +25,8 @@ def atomic_writer(path: str | os.PathLike[str], *, binary: bool = False) -> Iter
     except OSError as exc:
         raise UsageError(f"{target}: cannot write: {exc.strerror}") from None
     try:
-        with os.fdopen(fd, "wb" if binary else "w", **({} if binary else {"encoding": "utf-8", "newline": "\n"})) as fh:
+        text = {} if binary else {"encoding": "utf-8", "newline": "\n"}
+        with os.fdopen(fd, "wb" if binary else "w", **text) as fh:
             yield fh
         os.chmod(tmp, 0o644)
         os.replace(tmp, target)

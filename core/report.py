@@ -122,8 +122,10 @@ def summary(an: Analysis, *, machine_note: str = "") -> str:
     if not ann.zones:
         lines.append("    none: no block or junction is predicted 10 % or more below F")
     else:
-        lines.append(f"    {'#':>2s}  {'lines':13s} {'extent':>9s} {'slow pts':>8s} {'worst':>6s} "
-                     f"{'min feed':>22s} {'cost':>8s}  cause")
+        lines.append(
+            f"    {'#':>2s}  {'lines':13s} {'extent':>9s} {'slow pts':>8s} {'worst':>6s} "
+            f"{'min feed':>22s} {'cost':>8s}  cause"
+        )
         for z in ann.zones:
             feed = f"{z.min_feed * PER_MIN:,.0f} of F{z.programmed_feed * PER_MIN:,.0f}"
             lines.append(
@@ -170,11 +172,18 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
         "indicators": list(ev.indicator_names),
         "notices": [str(n) for n in tp.notices],
         "zones": [
-            {"rank": z.rank, "line_start": z.line_first, "line_end": z.line_last,
-             "extent_mm": round(z.length, 4), "discontinuities": z.discontinuities,
-             "capped_blocks": z.capped_blocks, "worst_reduction": round(z.worst_reduction, 6),
-             "min_feed": round(z.min_feed * PER_MIN, 3), "cause": z.cause,
-             "time_lost_s": round(z.time_lost, 4)}
+            {
+                "rank": z.rank,
+                "line_start": z.line_first,
+                "line_end": z.line_last,
+                "extent_mm": round(z.length, 4),
+                "discontinuities": z.discontinuities,
+                "capped_blocks": z.capped_blocks,
+                "worst_reduction": round(z.worst_reduction, 6),
+                "min_feed": round(z.min_feed * PER_MIN, 3),
+                "cause": z.cause,
+                "time_lost_s": round(z.time_lost, 4),
+            }
             for z in an.annotations.zones
         ],
     }
@@ -194,14 +203,28 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
         labels[ev.junction_limit].tolist(),
     ]
     fh.write(' "junctions": [')
-    _write_rows(fh, _records(("line", "next_line", "programmed_feed", "predicted_feed",
-                              "reduction", "indicator", "limit"), jcols))
+    _write_rows(
+        fh,
+        _records(
+            (
+                "line",
+                "next_line",
+                "programmed_feed",
+                "predicted_feed",
+                "reduction",
+                "indicator",
+                "limit",
+            ),
+            jcols,
+        ),
+    )
     fh.write("],\n")
 
     kinds = np.array(KIND_LABELS, dtype=object)
     el_lim = np.where(ev.element_limit >= 0, ev.element_limit, 0)
-    el_cause = np.where(ev.element_indicator >= 0,
-                        names[ev.element_indicator] + ": " + labels[el_lim], None)
+    el_cause = np.where(
+        ev.element_indicator >= 0, names[ev.element_indicator] + ": " + labels[el_lim], None
+    )
     ecols = [
         tp.line.tolist(),
         kinds[tp.kind].tolist(),
@@ -212,8 +235,21 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
         el_cause.tolist(),
     ]
     fh.write(' "elements": [')
-    _write_rows(fh, _records(("line", "kind", "length_mm", "programmed_feed",
-                              "predicted_feed", "min_length_mm", "limited_by"), ecols))
+    _write_rows(
+        fh,
+        _records(
+            (
+                "line",
+                "kind",
+                "length_mm",
+                "programmed_feed",
+                "predicted_feed",
+                "min_length_mm",
+                "limited_by",
+            ),
+            ecols,
+        ),
+    )
     fh.write("]\n}\n")
 
 

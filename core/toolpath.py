@@ -163,8 +163,12 @@ class ToolPath:
         ):
             set_(self, name, _column(getattr(self, name), n, name, dtype))
         offs = np.ascontiguousarray(self.op_offsets, dtype=np.int64)
-        if offs.ndim != 1 or offs.size < 1 or offs[0] != 0 or offs[-1] != n or np.any(
-            np.diff(offs) < 0
+        if (
+            offs.ndim != 1
+            or offs.size < 1
+            or offs[0] != 0
+            or offs[-1] != n
+            or np.any(np.diff(offs) < 0)
         ):
             raise ValueError(f"op_offsets must rise from 0 to {n}, got {offs[:5]}...")
         set_(self, "op_offsets", offs)
@@ -210,7 +214,12 @@ class ToolPath:
         radius = g.norm(r0)
         pitch = g.arc_pitch(s, e, nrm, sweep)
         return {
-            "idx": idx, "r0": r0, "r1": r1, "radius": radius, "pitch": pitch, "ccw": ccw,
+            "idx": idx,
+            "r0": r0,
+            "r1": r1,
+            "radius": radius,
+            "pitch": pitch,
+            "ccw": ccw,
         }
 
     @cached_property
@@ -297,7 +306,7 @@ class ToolPath:
 
     @cached_property
     def turn_angle(self) -> NDArray[np.float64]:
-        """(n - 1,) direction change beta (rad, [0, pi]) between move j's end and move j+1's start."""
+        """(n - 1,) direction change beta (rad, [0, pi]) from move j's end to move j+1's start."""
         if self.n < 2:
             return np.zeros(0)
         return g.angle_between(self.tangent_end[:-1], self.tangent_start[1:])
@@ -394,10 +403,18 @@ def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
     np.maximum.at(mode, target[has], tp.path_mode[removed[has]])
     offs = np.concatenate([[0], np.cumsum(keep)])[tp.op_offsets].astype(np.int64)
     cols = {
-        "kind": tp.kind[keep], "start": tp.start[keep], "end": tp.end[keep],
-        "center": tp.center[keep], "normal": tp.normal[keep], "sweep": tp.sweep[keep],
-        "feed": tp.feed[keep], "line": tp.line[keep], "block": tp.block[keep],
-        "tool": tp.tool[keep], "path_mode": mode[keep], "dwell": dwell[keep],
+        "kind": tp.kind[keep],
+        "start": tp.start[keep],
+        "end": tp.end[keep],
+        "center": tp.center[keep],
+        "normal": tp.normal[keep],
+        "sweep": tp.sweep[keep],
+        "feed": tp.feed[keep],
+        "line": tp.line[keep],
+        "block": tp.block[keep],
+        "tool": tp.tool[keep],
+        "path_mode": mode[keep],
+        "dwell": dwell[keep],
         "tolerance": tp.tolerance[keep],
     }
     names = tp.op_names

@@ -49,8 +49,9 @@ def tangential_jerk(t: NDArray[np.float64], machine: Machine) -> tuple[NDArray, 
     return per_axis[np.arange(per_axis.shape[0]), axis], axis
 
 
-def transition_feed(jerk: NDArray[np.float64], dt: float,
-                    curvature_jump: NDArray[np.float64]) -> NDArray[np.float64]:
+def transition_feed(
+    jerk: NDArray[np.float64], dt: float, curvature_jump: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """Eq. (11)-(14): V = sqrt(J dt / |dk|) (mm/s) for a curvature jump |dk| (1/mm)."""
     with np.errstate(divide="ignore", invalid="ignore"):
         v = np.sqrt(jerk * dt / curvature_jump)

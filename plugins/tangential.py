@@ -50,8 +50,9 @@ AXES = ("X", "Y", "Z")
 LABELS = tuple(f"{q} {ax}" for q in ("feed", "acceleration", "jerk") for ax in AXES)
 
 
-def inserted_radius(beta: NDArray[np.float64], length: NDArray[np.float64],
-                    tit: NDArray[np.float64] | float) -> NDArray[np.float64]:
+def inserted_radius(
+    beta: NDArray[np.float64], length: NDArray[np.float64], tit: NDArray[np.float64] | float
+) -> NDArray[np.float64]:
     """Eq. (1): radius (mm) of the arc inserted at a corner of direction change ``beta``.
 
     Parameters
@@ -77,8 +78,9 @@ def inserted_radius(beta: NDArray[np.float64], length: NDArray[np.float64],
     return np.maximum(np.fmin(r_tol, r_len), 0.0)
 
 
-def max_share(a: NDArray[np.float64], b: NDArray[np.float64],
-              sweep: NDArray[np.float64]) -> NDArray[np.float64]:
+def max_share(
+    a: NDArray[np.float64], b: NDArray[np.float64], sweep: NDArray[np.float64]
+) -> NDArray[np.float64]:
     """max over phi in [0, sweep] of |a cos(phi) + b sin(phi)|, elementwise."""
     peak = np.hypot(a, b)
     phi_peak = np.mod(np.arctan2(b, a), np.pi)

@@ -79,7 +79,11 @@ def path(moves: list[dict], feed: float = 100.0) -> ToolPath:
     if arcs.any():
         from core.geometry import arc_sweep
 
-        cols["sweep"][arcs] = arc_sweep(cols["start"][arcs], cols["end"][arcs],
-                                        cols["center"][arcs], cols["normal"][arcs],
-                                        cols["kind"][arcs] == MoveKind.ARC_CCW)
+        cols["sweep"][arcs] = arc_sweep(
+            cols["start"][arcs],
+            cols["end"][arcs],
+            cols["center"][arcs],
+            cols["normal"][arcs],
+            cols["kind"][arcs] == MoveKind.ARC_CCW,
+        )
     return ToolPath(**cols)

@@ -24,8 +24,9 @@ def program(tmp_path):
 
 def run(*args):
     """The command in a fresh interpreter (exactly as a user runs it)."""
-    return subprocess.run([sys.executable, "-m", "core", *map(str, args)], capture_output=True,
-                          text=True, cwd=ROOT)
+    return subprocess.run(
+        [sys.executable, "-m", "core", *map(str, args)], capture_output=True, text=True, cwd=ROOT
+    )
 
 
 def test_analyze_summary_json_and_svg(program, tmp_path, capsys):
@@ -35,8 +36,15 @@ def test_analyze_summary_json_and_svg(program, tmp_path, capsys):
     out = capsys.readouterr().out
     assert "preset siemens-840d, the default" in out
     data = json.loads(js.read_text())
-    for key in ("program", "machine", "moves", "feed_length_mm", "programmed_time_s",
-                "junctions", "elements"):
+    for key in (
+        "program",
+        "machine",
+        "moves",
+        "feed_length_mm",
+        "programmed_time_s",
+        "junctions",
+        "elements",
+    ):
         assert key in data
     assert data["moves"] == 7
     # Z1 -> Z0 is 1 mm, X0 -> X10 10 mm, Y0 -> Y10 10 mm, then three 1 mm X steps: 24 mm.
@@ -68,8 +76,13 @@ def test_analyze_feed_length_line(program, capsys):
 
 def test_demo_runs_without_a_program(tmp_path):
     """`ncperf analyze` alone runs the bundled Z-level demo and writes an SVG."""
-    r = subprocess.run([sys.executable, "-m", "core", "analyze"], capture_output=True,
-                       text=True, cwd=tmp_path, env={"PYTHONPATH": str(ROOT), "PATH": ""})
+    r = subprocess.run(
+        [sys.executable, "-m", "core", "analyze"],
+        capture_output=True,
+        text=True,
+        cwd=tmp_path,
+        env={"PYTHONPATH": str(ROOT), "PATH": ""},
+    )
     assert r.returncode == 0, r.stderr
     assert "zlevel_cavity.ngc" in r.stdout
     ET.parse(tmp_path / "ncperf-demo.svg")
@@ -88,11 +101,13 @@ def test_machines_and_plugins_commands():
 
 @pytest.mark.parametrize(
     "text,line,fragment",
-    [("", None, "empty file"),
-     ("G21 G1 X1 F60\nG1 X2 E5\n", 2, "unknown word E"),
-     ("G21 G1 X1 F60\nG1 X1.2.3\n", 2, "malformed number"),
-     ("G21 G1 X1 F60\nG1 X1" + "0" * 400 + "\n", 2, "number out of range"),
-     ("G21 G1 X0 Y0 F60\nG2 X1 Y0 I0 J0\n", 2, "arc with zero radius")],
+    [
+        ("", None, "empty file"),
+        ("G21 G1 X1 F60\nG1 X2 E5\n", 2, "unknown word E"),
+        ("G21 G1 X1 F60\nG1 X1.2.3\n", 2, "malformed number"),
+        ("G21 G1 X1 F60\nG1 X1" + "0" * 400 + "\n", 2, "number out of range"),
+        ("G21 G1 X0 Y0 F60\nG2 X1 Y0 I0 J0\n", 2, "arc with zero radius"),
+    ],
     ids=["empty", "unknown word", "malformed", "inf", "zero radius"],
 )
 def test_bad_input_one_line_exit_1_no_output(tmp_path, text, line, fragment):

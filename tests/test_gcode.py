@@ -185,8 +185,15 @@ def test_arc_planes(plane, block, normal, mid):
     assert np.allclose(tp.normal[-1], normal)
     from core.geometry import sample_arcs
 
-    pts = sample_arcs(tp.start[-1:], tp.center[-1:], tp.normal[-1:], np.array([False]),
-                      tp.sweep[-1:], np.zeros(1), np.array([2]))
+    pts = sample_arcs(
+        tp.start[-1:],
+        tp.center[-1:],
+        tp.normal[-1:],
+        np.array([False]),
+        tp.sweep[-1:],
+        np.zeros(1),
+        np.array([2]),
+    )
     assert np.allclose(pts[1], mid, atol=1e-9)
 
 
@@ -226,8 +233,12 @@ def test_linuxcnc_g64_p_sets_the_path_tolerance():
 
 @pytest.mark.parametrize(
     "dialect,block,seconds",
-    [("linuxcnc", "G4 P1.5", 1.5), ("fanuc", "G4 P1500", 1.5), ("fanuc", "G4 X2.", 2.0),
-     ("siemens", "G4 F2.5", 2.5)],
+    [
+        ("linuxcnc", "G4 P1.5", 1.5),
+        ("fanuc", "G4 P1500", 1.5),
+        ("fanuc", "G4 X2.", 2.0),
+        ("siemens", "G4 F2.5", 2.5),
+    ],
     ids=["linuxcnc P s", "fanuc P ms", "fanuc X s", "siemens F s"],
 )
 def test_dwell(dialect, block, seconds):
@@ -258,8 +269,10 @@ def test_words_that_do_not_change_the_path():
 # ------------------------------------------------------------------------------ syntax
 def test_comments_percent_and_o_number():
     """( ) and ; comments, % lines and a program number O are passed over."""
-    text = "%\nO1234 (PART)\n(comment only)\nG21 (mm) G1 X1 F60 ; end comment\n" \
-           "; whole line\nX2 (a (b)\n%\n"
+    text = (
+        "%\nO1234 (PART)\n(comment only)\nG21 (mm) G1 X1 F60 ; end comment\n"
+        "; whole line\nX2 (a (b)\n%\n"
+    )
     with pytest.raises(InputError, match="nested comment"):
         read(text)
     tp = read(text.replace("(a (b)", "(a b)"))
@@ -316,9 +329,13 @@ def test_unknown_start_notice():
 
 @pytest.mark.parametrize(
     "name,text,dialect",
-    [("a.ngc", "G1 X1 F1", "linuxcnc"), ("a.mpf", "G1 X1 F1", "siemens"),
-     ("a.nc", "G1 X1 F1\nSOFT", "siemens"), ("a.nc", "G64 P0.01\nG1 X1 F1", "linuxcnc"),
-     ("a.nc", "G1 X1 F1", "fanuc")],
+    [
+        ("a.ngc", "G1 X1 F1", "linuxcnc"),
+        ("a.mpf", "G1 X1 F1", "siemens"),
+        ("a.nc", "G1 X1 F1\nSOFT", "siemens"),
+        ("a.nc", "G64 P0.01\nG1 X1 F1", "linuxcnc"),
+        ("a.nc", "G1 X1 F1", "fanuc"),
+    ],
     ids=["ngc", "mpf", "siemens keyword", "G64 P", "plain"],
 )
 def test_dialect_detection(name, text, dialect):
@@ -332,8 +349,10 @@ def test_dialect_detection(name, text, dialect):
 
 def test_vectorised_and_per_line_tokenisers_agree():
     """The numpy path and the per-line path read the same words from the same lines."""
-    body = ("G21 G17 G90\nN10 G0 X1.5 Y-2 Z+.25\nG1 Z-0.125 F1200.\nG2 X3.5 Y0 I1 J1\n"
-            "G3 X1.5 Y-2 R2.\nG1 X0 Y0 (c) Z1\n")
+    body = (
+        "G21 G17 G90\nN10 G0 X1.5 Y-2 Z+.25\nG1 Z-0.125 F1200.\nG2 X3.5 Y0 I1 J1\n"
+        "G3 X1.5 Y-2 R2.\nG1 X0 Y0 (c) Z1\n"
+    )
     plain = read(body)
     # A ';' comment on every line sends every line through the per-line path.
     special = read("".join(line + " ;x\n" for line in body.splitlines()))
@@ -412,8 +431,7 @@ SIEMENS_ERRORS = [
 ]
 
 
-@pytest.mark.parametrize("text,line,fragment", SIEMENS_ERRORS,
-                         ids=[e[2] for e in SIEMENS_ERRORS])
+@pytest.mark.parametrize("text,line,fragment", SIEMENS_ERRORS, ids=[e[2] for e in SIEMENS_ERRORS])
 def test_siemens_errors(text, line, fragment):
     """Siemens CIP, splines, polynomials, parameters, frames and cycles: errors with the line."""
     fails(text, line, fragment, name="t.mpf")

@@ -70,8 +70,15 @@ def _segments(tp, step=0.05):
     a = np.flatnonzero(tp.is_arc)
     if a.size:
         counts = np.maximum(2, np.ceil(tp.length[a] / step)).astype(np.int64)
-        pts = sample_arcs(tp.start[a], tp.center[a], tp.normal[a],
-                          tp.kind[a] == MoveKind.ARC_CCW, tp.sweep[a], tp.pitch[a], counts)
+        pts = sample_arcs(
+            tp.start[a],
+            tp.center[a],
+            tp.normal[a],
+            tp.kind[a] == MoveKind.ARC_CCW,
+            tp.sweep[a],
+            tp.pitch[a],
+            counts,
+        )
         first = np.cumsum(counts + 1) - (counts + 1)
         keep = np.ones(len(pts), dtype=bool)
         keep[first + counts] = False  # the last point of each arc starts no segment
@@ -94,7 +101,8 @@ def _distance_to_path(points, a, b, chunk=400):
 
 
 SUITE = sorted(p.name for p in (SHARED / "data" / "linuxcnc" / "suite").glob("*.ngc")) or [
-    "01_polygons_f2000.ngc"]
+    "01_polygons_f2000.ngc"
+]
 
 
 @pytest.mark.parametrize("name", SUITE)

@@ -44,29 +44,48 @@ def test_units_converted_to_mm_and_s(tmp_path):
     assert np.allclose(m.max_acceleration, [2500.0, 2000.0, 1000.0])
     assert m.max_jerk[0] == 5000.0 and m.max_jerk[1] == 4000.0 and math.isinf(m.max_jerk[2])
     assert (m.interpolation_time, m.path_tolerance, m.curvature_transition_time) == (
-        0.012, 0.01, 0.008)
+        0.012,
+        0.01,
+        0.008,
+    )
 
 
 @pytest.mark.parametrize(
     "change,line,message",
     [
-        (("max_acceleration = 2.0", "max_acel = 2.0"), 8,
-         "unknown key 'max_acel' in [axes.Y]; did you mean 'max_acceleration'?"),
+        (
+            ("max_acceleration = 2.0", "max_acel = 2.0"),
+            8,
+            "unknown key 'max_acel' in [axes.Y]; did you mean 'max_acceleration'?",
+        ),
         (("max_jerk = 4.0\n", ""), 6, "missing key 'max_jerk' in [axes.Y]"),
         (("max_feed = 24.0", "max_feed = -24.0"), 7, "'max_feed' in [axes.Y] must be a positive"),
         (("max_feed = 24.0", "max_feed = 0"), 7, "must be a positive number"),
         (("max_feed = 24.0", "max_feed = inf"), 7, "must be a positive number, got inf"),
         (("max_feed = 24.0", "max_feed = nan"), 7, "must be a positive number"),
         (("max_feed = 24.0", 'max_feed = "fast"'), 7, "must be a number, got 'fast'"),
-        (("interpolation_time = 0.012", "interpolation_time = 0.0"), 15,
-         "'interpolation_time' in [controller] must be a positive"),
-        (("path_tolerance = 0.01", "path_tolerence = 0.01"), 16,
-         "did you mean 'path_tolerance'"),
+        (
+            ("interpolation_time = 0.012", "interpolation_time = 0.0"),
+            15,
+            "'interpolation_time' in [controller] must be a positive",
+        ),
+        (("path_tolerance = 0.01", "path_tolerence = 0.01"), 16, "did you mean 'path_tolerance'"),
         (("[axes.Z]", "[axes.W]"), 10, "unknown key 'W' in [axes]"),
         (('name = "Test mill"', 'name = "Test mill'), 1, "not valid TOML"),
     ],
-    ids=["misspelt", "missing", "negative", "zero", "inf feed", "nan", "string", "zero t_int",
-         "misspelt controller", "axis W", "bad toml"],
+    ids=[
+        "misspelt",
+        "missing",
+        "negative",
+        "zero",
+        "inf feed",
+        "nan",
+        "string",
+        "zero t_int",
+        "misspelt controller",
+        "axis W",
+        "bad toml",
+    ],
 )
 def test_bad_files_name_file_line_and_key(tmp_path, change, line, message):
     """Missing, misspelt, negative, zero and non-numeric values: one line naming file and line."""

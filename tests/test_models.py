@@ -15,8 +15,11 @@ MM_MIN = 60.0  # mm/s -> mm/min
 
 def _junction(ev, j):
     k = int(np.flatnonzero(ev.junction == j)[0])
-    return ev.junction_feed[k], ev.labels[ev.junction_limit[k]], ev.indicator_names[
-        ev.junction_indicator[k]]
+    return (
+        ev.junction_feed[k],
+        ev.labels[ev.junction_limit[k]],
+        ev.indicator_names[ev.junction_indicator[k]],
+    )
 
 
 # ----------------------------------------------------------------------------- model 1
@@ -89,8 +92,9 @@ def test_model1_30_degree_corner_per_axis_shares(models):
     assert feed == pytest.approx(7.379081348, rel=1e-8)
     # The acceleration limits computed with the shares, directly:
     r = 0.2834774027
-    f, lim = tangential.corner_feed(np.array([[1.0, 0, 0]]), np.array([[c, s, 0]]),
-                                    np.array([r]), machine(jerk=(1e6, 1e6, 1e6)))
+    f, lim = tangential.corner_feed(
+        np.array([[1.0, 0, 0]]), np.array([[c, s, 0]]), np.array([r]), machine(jerk=(1e6, 1e6, 1e6))
+    )
     assert tangential.LABELS[lim[0]] == "acceleration Y"
     assert f[0] == pytest.approx(26.621297992, rel=1e-8)
 
@@ -113,7 +117,7 @@ def test_model1_bisector_off_axis(models):
 
 
 def test_model1_max_share_peak_inside_and_outside():
-    """max |a cos + b sin| over [0, s]: the peak sqrt(a^2+b^2) if its angle is inside, else an end."""
+    """max |a cos + b sin| over [0, s]: sqrt(a^2 + b^2) if its angle is inside, else an end."""
     # a = 1, b = 0 (peak at 0): share 1. a = 0, b = 1 (peak at 90 deg): 1 if s >= 90 deg,
     # else sin(s). a = cos 10, b = -sin 10 (peak at -10 deg = 170 deg mod 180): for
     # s = 90 deg the ends give cos 10 = 0.98481 and |cos 100| = 0.17365.
@@ -132,9 +136,24 @@ def test_model1_uses_program_tolerance(models):
     # TIT 0.1 mm at 90 deg: R = 0.241421 mm; acceleration binds with high jerk:
     # sqrt(2500 * 0.2414214) = 24.56745 mm/s.
     tp = path([{"end": (10, 0, 0)}, {"end": (10, 10, 0)}], feed=100.0)
-    cols = {k: getattr(tp, k) for k in ("kind", "start", "end", "center", "normal", "sweep",
-                                         "feed", "line", "block", "tool", "path_mode", "dwell",
-                                         "op_offsets")}
+    cols = {
+        k: getattr(tp, k)
+        for k in (
+            "kind",
+            "start",
+            "end",
+            "center",
+            "normal",
+            "sweep",
+            "feed",
+            "line",
+            "block",
+            "tool",
+            "path_mode",
+            "dwell",
+            "op_offsets",
+        )
+    }
     from core import ToolPath
 
     tp2 = ToolPath(**cols, tolerance=np.array([0.1, 0.1]))
@@ -161,8 +180,9 @@ def test_model1_tiny_angle_is_not_reduced(models):
 # ----------------------------------------------------------------------------- model 2
 def test_eq13_line_to_arc(models):
     """Eq. (13): line along X into an R 5 arc: V = sqrt(J dt R) = sqrt(5000*0.012*5) = 17.3205."""
-    tp = path([{"end": (10, 0, 0)},
-               {"end": (15, 5, 0), "center": (10, 5, 0), "ccw": True}], feed=100.0)
+    tp = path(
+        [{"end": (10, 0, 0)}, {"end": (15, 5, 0), "center": (10, 5, 0), "ccw": True}], feed=100.0
+    )
     ev = models.evaluate(tp, machine())
     feed, limit, ind = _junction(ev, 0)
     assert ind == "curvature" and limit == "jerk X"
@@ -173,8 +193,13 @@ def test_eq14_arc_to_arc_same_direction(models):
     """Eq. (14): R1 10 -> R2 5 turning the same way: V = sqrt(10*5*5000*0.012/5) = 24.4949."""
     # Arc 1: centre (0, 10), from (0, 0) ccw a quarter to (10, 10); tangent there (0, 1).
     # Arc 2: R 5, centre (5, 10), ccw, continues tangent upwards from (10, 10) to (5, 15).
-    tp = path([{"end": (10, 10, 0), "center": (0, 10, 0), "ccw": True},
-               {"end": (5, 15, 0), "center": (5, 10, 0), "ccw": True}], feed=100.0)
+    tp = path(
+        [
+            {"end": (10, 10, 0), "center": (0, 10, 0), "ccw": True},
+            {"end": (5, 15, 0), "center": (5, 10, 0), "ccw": True},
+        ],
+        feed=100.0,
+    )
     ev = models.evaluate(tp, machine())
     feed, limit, ind = _junction(ev, 0)
     assert ind == "curvature" and limit == "jerk Y"  # tangent along Y
@@ -186,8 +211,13 @@ def test_inflection_uses_sum_of_curvatures(models):
 
     (Eq. 14 as printed, with |R1 - R2|, would give 24.4949 here.)"""
     # Arc 2: R 5 clockwise from (10, 10), tangent (0, 1), centre to the right: (15, 10).
-    tp = path([{"end": (10, 10, 0), "center": (0, 10, 0), "ccw": True},
-               {"end": (15, 15, 0), "center": (15, 10, 0), "ccw": False}], feed=100.0)
+    tp = path(
+        [
+            {"end": (10, 10, 0), "center": (0, 10, 0), "ccw": True},
+            {"end": (15, 15, 0), "center": (15, 10, 0), "ccw": False},
+        ],
+        feed=100.0,
+    )
     ev = models.evaluate(tp, machine())
     feed, _, ind = _junction(ev, 0)
     assert ind == "curvature"
@@ -219,8 +249,13 @@ def test_eq15_in_the_curvature_model(models):
 
 def test_same_arc_twice_is_no_discontinuity(models):
     """Two consecutive arcs of one circle: no curvature jump, no junction record."""
-    tp = path([{"end": (10, 10, 0), "center": (0, 10, 0), "ccw": True},
-               {"end": (0, 20, 0), "center": (0, 10, 0), "ccw": True}], feed=100.0)
+    tp = path(
+        [
+            {"end": (10, 10, 0), "center": (0, 10, 0), "ccw": True},
+            {"end": (0, 20, 0), "center": (0, 10, 0), "ccw": True},
+        ],
+        feed=100.0,
+    )
     ev = models.evaluate(tp, machine())
     assert ev.junction.size == 0
 
@@ -262,9 +297,23 @@ def test_eq16_paper_time(models):
 def test_exact_stop_and_dwell(models):
     """G61/G9 blocks and dwells end at rest: predicted junction feed 0, named as such."""
     tp = path([{"end": (10, 0, 0)}, {"end": (20, 0, 0)}, {"end": (30, 0, 0)}], feed=100.0)
-    cols = {k: getattr(tp, k) for k in ("kind", "start", "end", "center", "normal", "sweep",
-                                         "feed", "line", "block", "tool", "tolerance",
-                                         "op_offsets")}
+    cols = {
+        k: getattr(tp, k)
+        for k in (
+            "kind",
+            "start",
+            "end",
+            "center",
+            "normal",
+            "sweep",
+            "feed",
+            "line",
+            "block",
+            "tool",
+            "tolerance",
+            "op_offsets",
+        )
+    }
     from core import ToolPath
 
     tp2 = ToolPath(**cols, path_mode=np.array([1, 0, 0]), dwell=np.array([0.0, 2.0, 0.0]))

@@ -20,18 +20,21 @@ from core.report import write_json
 from tests.conftest import ROOT, machine, path
 from tests.plugins import sample
 
-HOOKS = sorted(n for n, f in inspect.getmembers(hookspecs, inspect.isfunction)
-               if n.startswith("ncperf_"))
+HOOKS = sorted(
+    n for n, f in inspect.getmembers(hookspecs, inspect.isfunction) if n.startswith("ncperf_")
+)
 
 
 def test_importing_core_builds_no_plugin_manager():
     """`import core` has no side effects: no plugin manager, no adapter or plugin imported."""
-    code = ("import sys, core; "
-            "print(any(m.startswith(('adapters', 'plugins')) for m in sys.modules))")
+    code = (
+        "import sys, core; print(any(m.startswith(('adapters', 'plugins')) for m in sys.modules))"
+    )
     import subprocess
 
-    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True,
-                         cwd=ROOT, check=True)
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
+    )
     assert out.stdout.strip() == "False"
 
 
@@ -41,8 +44,12 @@ def test_builtins_registered_with_their_hooks():
     rows = dict(nc.plugins())
     assert rows["adapters.gcode"] == ["ncperf_extract"]
     assert rows["adapters.svg"] == ["ncperf_display"]
-    for name in ("plugins.tangential", "plugins.curvature", "plugins.ncu_capacity",
-                 "plugins.exact_stop"):
+    for name in (
+        "plugins.tangential",
+        "plugins.curvature",
+        "plugins.ncu_capacity",
+        "plugins.exact_stop",
+    ):
         assert rows[name] == ["ncperf_evaluate"]
 
 
@@ -133,20 +140,24 @@ def test_bad_indicator_type_is_caught():
 def test_indicator_validates_shapes():
     """An Indicator with mismatched columns says which and what shape."""
     with pytest.raises(ValueError, match=r"feed must have shape \(2,\), got \(3,\)"):
-        core.Indicator(name="x", at="junction", index=[0, 1], feed=[1, 2, 3], limit=[0, 0],
-                       labels=("a",))
+        core.Indicator(
+            name="x", at="junction", index=[0, 1], feed=[1, 2, 3], limit=[0, 0], labels=("a",)
+        )
     with pytest.raises(ValueError, match="repeated junction indices"):
-        core.Indicator(name="x", at="junction", index=[0, 0], feed=[1, 2], limit=[0, 0],
-                       labels=("a",))
+        core.Indicator(
+            name="x", at="junction", index=[0, 0], feed=[1, 2], limit=[0, 0], labels=("a",)
+        )
 
 
 def test_combine_keeps_the_lowest_feed_per_junction():
     """Several indicators at one junction: the lowest feed wins and names its limit."""
     tp = path([{"end": (10, 0, 0)}, {"end": (20, 0, 0)}, {"end": (30, 0, 0)}], feed=100.0)
-    a = core.Indicator(name="a", at="junction", index=[0, 1], feed=[50.0, 200.0],
-                       limit=[0, 0], labels=("a limit",))
-    b = core.Indicator(name="b", at="junction", index=[1, 0], feed=[80.0, 60.0],
-                       limit=[0, 0], labels=("b limit",))
+    a = core.Indicator(
+        name="a", at="junction", index=[0, 1], feed=[50.0, 200.0], limit=[0, 0], labels=("a limit",)
+    )
+    b = core.Indicator(
+        name="b", at="junction", index=[1, 0], feed=[80.0, 60.0], limit=[0, 0], labels=("b limit",)
+    )
     ev = core.combine(tp, machine(), [a, b])
     assert list(ev.junction) == [0, 1]
     assert list(ev.junction_feed) == [50.0, 80.0]
@@ -169,6 +180,9 @@ def test_every_hook_is_documented_and_tested(hook):
     spec_doc = getattr(hookspecs, hook).__doc__
     assert ":param" in spec_doc and ":returns:" in spec_doc
     tests = "".join(p.read_text() for p in (ROOT / "tests").glob("test_*.py"))
-    method = {"ncperf_extract": "extract(", "ncperf_evaluate": "evaluate(",
-              "ncperf_display": "display("}[hook]
+    method = {
+        "ncperf_extract": "extract(",
+        "ncperf_evaluate": "evaluate(",
+        "ncperf_display": "display(",
+    }[hook]
     assert f"nc.{method}" in tests

@@ -49,10 +49,14 @@ def test_arc_derived_quantities():
 
 def test_curvature_jump_signs():
     """Line -> arc 1/R; same-way arcs |1/R1 - 1/R2|; inflection 1/R1 + 1/R2."""
-    tp = path([{"end": (10, 0, 0)},
-               {"end": (20, 10, 0), "center": (10, 10, 0), "ccw": True},
-               {"end": (15, 15, 0), "center": (15, 10, 0), "ccw": True},
-               {"end": (10, 20, 0), "center": (15, 20, 0), "ccw": False}])
+    tp = path(
+        [
+            {"end": (10, 0, 0)},
+            {"end": (20, 10, 0), "center": (10, 10, 0), "ccw": True},
+            {"end": (15, 15, 0), "center": (15, 10, 0), "ccw": True},
+            {"end": (10, 20, 0), "center": (15, 20, 0), "ccw": False},
+        ]
+    )
     assert tp.curvature_jump == pytest.approx([0.1, 0.1, 0.4])
 
 
@@ -90,8 +94,10 @@ def test_zones_merge_close_corners_and_rank_by_time_lost(models):
     # turn, (10,0.5) right turn, (30,0.5) left turn. Jerk large, so each corner runs at
     # sqrt(A R), R = 0.0241421: v = 7.768870 mm/s. (The 0.5 mm block is shorter than
     # L = 1.2 mm, capped at 41.67 mm/s, more than the 36.2 mm/s acceleration allows there.)
-    tp = path([{"end": (10, 0, 0)}, {"end": (10, 0.5, 0)}, {"end": (30, 0.5, 0)},
-               {"end": (30, 20.5, 0)}], feed=100.0)
+    tp = path(
+        [{"end": (10, 0, 0)}, {"end": (10, 0.5, 0)}, {"end": (30, 0.5, 0)}, {"end": (30, 20.5, 0)}],
+        feed=100.0,
+    )
     ev = models.evaluate(tp, machine(jerk=(1e6, 1e6, 1e6)))
     v = math.sqrt(2500 * 0.0241421356237)
     F, A = 100.0, 2500.0

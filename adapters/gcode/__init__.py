@@ -19,14 +19,33 @@ from adapters.gcode.words import DIALECTS
 from core import ExtractOptions, InputError, ToolPath, UsageError, hookimpl
 
 #: Extensions CAM posts use for G-code.
-EXTENSIONS = frozenset({".nc", ".ngc", ".gcode", ".gc", ".g", ".tap", ".cnc", ".mpf", ".spf",
-                        ".ptp", ".eia", ".iso", ".min", ".din", ".fnc", ".nci"})
+EXTENSIONS = frozenset(
+    {
+        ".nc",
+        ".ngc",
+        ".gcode",
+        ".gc",
+        ".g",
+        ".tap",
+        ".cnc",
+        ".mpf",
+        ".spf",
+        ".ptp",
+        ".eia",
+        ".iso",
+        ".min",
+        ".din",
+        ".fnc",
+        ".nci",
+    }
+)
 
 _LOOKS_LIKE_GCODE = re.compile(rb"^[ \t]*(?:%|[Nn]\d+[ \t]*)?[GgMm]\d", re.MULTILINE)
 
 
-def read_gcode(data: bytes, name: str, *, dialect: str | None = None,
-               block_delete: bool = False) -> ToolPath:
+def read_gcode(
+    data: bytes, name: str, *, dialect: str | None = None, block_delete: bool = False
+) -> ToolPath:
     """Parse G-code text (bytes) into a ToolPath.
 
     Parameters
@@ -72,5 +91,4 @@ def ncperf_extract(source: object, options: ExtractOptions) -> ToolPath | None:
         raise InputError("is a folder, not a program", source=str(path)) from None
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror}", source=str(path)) from None
-    return read_gcode(data, str(path), dialect=options.dialect,
-                      block_delete=options.block_delete)
+    return read_gcode(data, str(path), dialect=options.dialect, block_delete=options.block_delete)

@@ -43,8 +43,9 @@ class Notes:
         self._count[message] += count
 
     def notices(self) -> tuple[Notice, ...]:
-        return tuple(Notice(self.source, ln, msg, self._count[msg])
-                     for msg, ln in self._first.items())
+        return tuple(
+            Notice(self.source, ln, msg, self._count[msg]) for msg, ln in self._first.items()
+        )
 
 
 def detect_dialect(path: str, words: Words) -> str:
@@ -94,7 +95,8 @@ class Interpreter:
 
     def _drop(self, keep: NDArray[np.bool_]) -> None:
         w = self.w
-        w.line, w.letter, w.value, w.bare = w.line[keep], w.letter[keep], w.value[keep], w.bare[keep]
+        w.line, w.letter = w.line[keep], w.letter[keep]
+        w.value, w.bare = w.value[keep], w.bare[keep]
 
     def _single(self, ch: str) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Per active line: the value of letter ``ch`` (NaN if absent); error if twice."""
@@ -137,25 +139,33 @@ class Interpreter:
             lines = np.array(sorted(w.block_delete), dtype=np.int64)
             if self.block_delete:
                 self._drop(~np.isin(w.line, lines))
-                self.notes.add("block-delete lines skipped (block delete on)", int(lines[0]),
-                               lines.size)
+                self.notes.add(
+                    "block-delete lines skipped (block delete on)", int(lines[0]), lines.size
+                )
             else:
-                self.notes.add("block-delete lines executed (block delete off; "
-                               "--block-delete skips them)", int(lines[0]), lines.size)
+                self.notes.add(
+                    "block-delete lines executed (block delete off; --block-delete skips them)",
+                    int(lines[0]),
+                    lines.size,
+                )
         is_m = w.letter == ord("M")
         mval = w.value[is_m]
         frac = mval != np.rint(mval)
         if frac.any():
-            raise self.error(w.line[np.flatnonzero(is_m)[np.argmax(frac)]],
-                             f"M{mval[np.argmax(frac)]:g} is not an M-code ncperf knows")
+            raise self.error(
+                w.line[np.flatnonzero(is_m)[np.argmax(frac)]],
+                f"M{mval[np.argmax(frac)]:g} is not an M-code ncperf knows",
+            )
         ends = w.line[is_m][np.isin(mval, list(W.M_END))]
         if ends.size:
             e = int(ends.min())
             after = w.line > e
             motion = after & np.isin(w.letter, [ord(c) for c in "GXYZ"])
             if motion.any():
-                self.notes.add("words after the end of program (M2/M30) ignored",
-                               int(w.line[np.argmax(motion)]))
+                self.notes.add(
+                    "words after the end of program (M2/M30) ignored",
+                    int(w.line[np.argmax(motion)]),
+                )
             self._drop(~after)
         letters = np.unique(w.letter)
         for code in letters:
@@ -164,11 +174,11 @@ class Interpreter:
                 continue
             first = w.line[np.argmax(w.letter == code)]
             if ch in EXTRA_AXES:
-                raise self.error(first, f"axis word {ch}: only X, Y and Z are supported "
-                                 "(3-axis G-code)")
+                raise self.error(
+                    first, f"axis word {ch}: only X, Y and Z are supported (3-axis G-code)"
+                )
             if ch == "L":
-                raise self.error(first, "L word (repeat count or subprogram call) is not "
-                                 "supported")
+                raise self.error(first, "L word (repeat count or subprogram call) is not supported")
             raise src.error(int(first), f"unknown word {ch}")
         if w.keywords:
             for line, kw in w.keywords:
@@ -253,8 +263,10 @@ class Interpreter:
                 raise self.error(self.al[np.argmax(hit)], f"{name} is not supported")
         self.path_mode = fill(G.PATH_MODE, 640)
         if self.dialect == "siemens" and not (gg[G.PATH_MODE] >= 0).any():
-            self.notes.add("no G64/G641..G645: continuous path assumed (an 840D's default "
-                           "may be exact stop G60)")
+            self.notes.add(
+                "no G64/G641..G645: continuous path assumed (an 840D's default "
+                "may be exact stop G60)"
+            )
         wcs_row = gg[G.WORK_OFFSET]
         wcs_set = np.flatnonzero(wcs_row >= 0)
         if wcs_set.size:
@@ -265,7 +277,8 @@ class Interpreter:
                 self.notes.add(
                     f"work offset changes to G{codes[change[0] + 1] / 10:g}: the offsets are "
                     "unknown, so moves before and after are not placed relative to each other",
-                    int(self.al[k]))
+                    int(self.al[k]),
+                )
         geom_inch = np.zeros(na, dtype=bool)
         feed_inch = np.zeros(na, dtype=bool)
         for code, (gi, fi) in W.UNITS.items():
@@ -273,8 +286,10 @@ class Interpreter:
             geom_inch[sel] = gi
             feed_inch[sel] = fi
         if self.dialect == "siemens" and (gg[G.UNITS] == 700).any():
-            self.notes.add("G70: feeds taken in mm/min (the basic system is assumed metric)",
-                           int(self.al[np.argmax(gg[G.UNITS] == 700)]))
+            self.notes.add(
+                "G70: feeds taken in mm/min (the basic system is assumed metric)",
+                int(self.al[np.argmax(gg[G.UNITS] == 700)]),
+            )
         self.scale = np.where(geom_inch, INCH, 1.0)
         self.feed_scale = np.where(feed_inch, INCH, 1.0) / 60.0  # -> mm/s
         self.any_inch = bool(geom_inch.any())
@@ -311,18 +326,24 @@ class Interpreter:
         full_circle = explicit_arc & ~has_axis & centre_words
         no_mode = has_axis & ~home & ((motion < 0) | (motion == W.MOTION_NONE))
         if no_mode.any():
-            raise self.error(al[np.argmax(no_mode)],
-                             "axis words without a motion mode (G0, G1, G2 or G3)")
+            raise self.error(
+                al[np.argmax(no_mode)], "axis words without a motion mode (G0, G1, G2 or G3)"
+            )
         if (machine & has_axis & (motion != W.MOTION_RAPID) & ~home).any():
             k = np.argmax(machine & has_axis & (motion != W.MOTION_RAPID))
             raise self.error(al[k], "G53 with a feed move: machine coordinates are unknown")
         if (home & has_axis).any():
-            self.notes.add("G28/G30: the move to the machine's home position is not modelled "
-                           "(home is unknown); the path continues from the intermediate point",
-                           int(al[np.argmax(home)]))
+            self.notes.add(
+                "G28/G30: the move to the machine's home position is not modelled "
+                "(home is unknown); the path continues from the intermediate point",
+                int(al[np.argmax(home)]),
+            )
         if (machine & has_axis).any():
-            self.notes.add("G53 machine coordinates taken as work coordinates (the offset is "
-                           "unknown); only rapids are affected", int(al[np.argmax(machine)]))
+            self.notes.add(
+                "G53 machine coordinates taken as work coordinates (the offset is "
+                "unknown); only rapids are affected",
+                int(al[np.argmax(machine)]),
+            )
         is_move = has_axis | full_circle
         self.is_move = is_move
         self.home = home
@@ -407,16 +428,21 @@ class Interpreter:
             raise self.error(al[np.argmax(bad)], "Q word not used by any code in this block")
         merge = p["Q"] & g64 & (self.vals["Q"] > 0)
         if lc and merge.any():
-            self.notes.add("G64 Q: LinuxCNC may merge collinear G1 blocks within Q; ncperf "
-                           "predicts every block", int(al[np.argmax(merge)]))
+            self.notes.add(
+                "G64 Q: LinuxCNC may merge collinear G1 blocks within Q; ncperf "
+                "predicts every block",
+                int(al[np.argmax(merge)]),
+            )
         o = self.w.letter == ord("O")
         if o.any():
             lines_o = self.li[o]
             others = np.isin(self.li, lines_o) & ~np.isin(self.w.letter, [ord("O"), ord("N")])
             if others.any():
-                raise self.error(self.w.line[np.argmax(others)],
-                                 "O word with other words in the block (subprograms are not "
-                                 "supported; a program number stands alone)")
+                raise self.error(
+                    self.w.line[np.argmax(others)],
+                    "O word with other words in the block (subprograms are not "
+                    "supported; a program number stands alone)",
+                )
 
     # ------------------------------------------------------------------ build
     def _build(self) -> ToolPath:
@@ -445,8 +471,9 @@ class Interpreter:
         if bad.any():
             k = int(np.argmax(bad))
             axes = "".join(a for a, u in zip(AXIS_LETTERS, unknown[k], strict=True) if u)
-            self.notes.add(f"feed move starts before {axes} was programmed: 0 assumed",
-                           int(al[mi[k]]))
+            self.notes.add(
+                f"feed move starts before {axes} was programmed: 0 assumed", int(al[mi[k]])
+            )
 
         # Feed (mm/s), modal.
         fvals, fpres = self.vals["F"], self.pres["F"] & ~self.consumed["F"]
@@ -462,7 +489,9 @@ class Interpreter:
         self._arcs(cols, mi)
 
         # Path mode: modal exact stop, G9 on the block, M0/M1 after the block.
-        exact_line = np.isin(self.path_mode, W.EXACT_STOP_CODES) | (self.g[W.Group.EXACT_STOP_BLOCK] >= 0)
+        exact_line = np.isin(self.path_mode, W.EXACT_STOP_CODES) | (
+            self.g[W.Group.EXACT_STOP_BLOCK] >= 0
+        )
         mode = np.where(exact_line[mi], PathMode.EXACT_STOP, PathMode.CONTINUOUS).astype(np.int8)
         stop_lines = np.flatnonzero(self.m_stop)
         if stop_lines.size:
@@ -502,23 +531,36 @@ class Interpreter:
         names = []
         for a in offs[:-1]:
             t = int(cols["tool"][a])
-            names.append(f"T{t} from line {int(cols['line'][a])}" if t >= 0
-                         else f"from line {int(cols['line'][a])}")
+            names.append(
+                f"T{t} from line {int(cols['line'][a])}"
+                if t >= 0
+                else f"from line {int(cols['line'][a])}"
+            )
         cols["op_offsets"] = offs
 
         if self.dialect == "fanuc":
             self._decimal_point_notice()
 
-        tp = ToolPath(**cols, op_names=tuple(names), source=self.src.name,
-                      units="inch" if self.any_inch else "mm")
+        tp = ToolPath(
+            **cols,
+            op_names=tuple(names),
+            source=self.src.name,
+            units="inch" if self.any_inch else "mm",
+        )
         tp, removed = drop_zero_length(tp)
         if removed.size:
-            self.notes.add("zero-length moves dropped", int(cols["line"][removed[0]] - 1),
-                           int(removed.size))
+            self.notes.add(
+                "zero-length moves dropped", int(cols["line"][removed[0]] - 1), int(removed.size)
+            )
         if tp.n == 0:
             raise _no_moves(self.src)
-        return ToolPath(**{k: getattr(tp, k) for k in cols}, op_names=tp.op_names,
-                        source=tp.source, notices=self.notes.notices(), units=tp.units)
+        return ToolPath(
+            **{k: getattr(tp, k) for k in cols},
+            op_names=tp.op_names,
+            source=tp.source,
+            notices=self.notes.notices(),
+            units=tp.units,
+        )
 
     def _arcs(self, cols: dict, mi: NDArray[np.int64]) -> None:
         arc_l = np.flatnonzero(self.arc[mi])
@@ -528,7 +570,8 @@ class Interpreter:
         al = self.al[lines]
         plane = self.plane[lines]
         normal = np.array([W.PLANE_NORMAL[int(p)] for p in (170, 180, 190)])[
-            np.searchsorted([170, 180, 190], plane)]
+            np.searchsorted([170, 180, 190], plane)
+        ]
         s = cols["start"][arc_l]
         e = cols["end"][arc_l]
         ccw = self.kind[lines] == MoveKind.ARC_CCW
@@ -549,8 +592,9 @@ class Interpreter:
         if bad.any():
             k = int(np.argmax(bad))
             word = CENTRE_LETTERS[int(np.argmax(normal[k]))]
-            raise self.error(al[k], f"{word} word is not in the arc's plane "
-                             f"(G{int(plane[k]) // 10})")
+            raise self.error(
+                al[k], f"{word} word is not in the arc's plane (G{int(plane[k]) // 10})"
+            )
         off_in = off - off_n[:, None] * normal
         absolute = self.arc_distance[lines] == 901
         start_n = g.dot(s, normal)[:, None] * normal
@@ -558,8 +602,14 @@ class Interpreter:
 
         r_idx = np.flatnonzero(has_r)
         if r_idx.size:
-            centre[r_idx] = self._r_centres(s[r_idx], e[r_idx], normal[r_idx], ccw[r_idx],
-                                            v["R"][lines[r_idx]] * scale[r_idx], al[r_idx])
+            centre[r_idx] = self._r_centres(
+                s[r_idx],
+                e[r_idx],
+                normal[r_idx],
+                ccw[r_idx],
+                v["R"][lines[r_idx]] * scale[r_idx],
+                al[r_idx],
+            )
         r0 = g.norm(g.radial(s, centre, normal))
         r1 = g.norm(g.radial(e, centre, normal))
         tiny = r0 < TOL.min_arc_radius
@@ -569,32 +619,39 @@ class Interpreter:
         off_circle = (mismatch > TOL.arc_end_abs) & (mismatch > TOL.arc_end_rel * r0)
         if off_circle.any():
             k = int(np.argmax(off_circle))
-            raise self.error(al[k], f"arc end point is {mismatch[k]:.4f} mm off the circle "
-                             f"(radius {r0[k]:.4f} mm from the start)")
+            raise self.error(
+                al[k],
+                f"arc end point is {mismatch[k]:.4f} mm off the circle "
+                f"(radius {r0[k]:.4f} mm from the start)",
+            )
         turns = np.zeros(arc_l.size)
         if self.dialect == "linuxcnc":
             pt = p["P"][lines]
             pv = v["P"][lines]
             badp = pt & ((pv < 1) | (pv != np.rint(pv)))
             if badp.any():
-                raise self.error(al[np.argmax(badp)], "P on an arc must be a positive integer "
-                                 "number of turns")
+                raise self.error(
+                    al[np.argmax(badp)], "P on an arc must be a positive integer number of turns"
+                )
             turns = np.where(pt, pv - 1, 0)
         sweep = g.arc_sweep(s, e, centre, normal, ccw, turns)
         cols["center"][arc_l] = centre
         cols["normal"][arc_l] = normal
         cols["sweep"][arc_l] = sweep
 
-    def _r_centres(self, s: NDArray, e: NDArray, normal: NDArray, ccw: NDArray,
-                   r: NDArray, lines: NDArray) -> NDArray:
+    def _r_centres(
+        self, s: NDArray, e: NDArray, normal: NDArray, ccw: NDArray, r: NDArray, lines: NDArray
+    ) -> NDArray:
         """Centres of R-format arcs: R > 0 the short way, R < 0 the long way round."""
         chord = e - s
         chord = chord - g.dot(chord, normal)[:, None] * normal
         length = g.norm(chord)
         same = length <= TOL.zero_length
         if same.any():
-            raise self.error(lines[np.argmax(same)],
-                             "R arc whose end point is its start point (use I/J/K for a circle)")
+            raise self.error(
+                lines[np.argmax(same)],
+                "R arc whose end point is its start point (use I/J/K for a circle)",
+            )
         rad = np.abs(r)
         if (rad < TOL.min_arc_radius).any():
             raise self.error(lines[np.argmax(rad < TOL.min_arc_radius)], "arc with zero radius")
@@ -603,8 +660,9 @@ class Interpreter:
         too_short = short & (length / 2 - rad > TOL.arc_radius)
         if too_short.any():
             k = int(np.argmax(too_short))
-            raise self.error(lines[k], f"R {r[k]:.4f} mm is less than half the chord "
-                             f"({length[k] / 2:.4f} mm)")
+            raise self.error(
+                lines[k], f"R {r[k]:.4f} mm is less than half the chord ({length[k] / 2:.4f} mm)"
+            )
         h = np.sqrt(np.maximum(h2, 0.0))
         left = np.cross(normal, chord / length[:, None])
         sign = np.where(ccw, 1.0, -1.0) * np.sign(r)
@@ -618,7 +676,10 @@ class Interpreter:
             self.notes.add(
                 f"{chr(w.letter[k])}{w.value[k]:g} has no decimal point: read as "
                 f"{w.value[k]:g} (calculator-type input); a Fanuc control without it reads "
-                "the least input increment (e.g. 0.001 mm)", int(w.line[k]), int(sel.sum()))
+                "the least input increment (e.g. 0.001 mm)",
+                int(w.line[k]),
+                int(sel.sum()),
+            )
 
 
 def _no_moves(src: Source) -> InputError:

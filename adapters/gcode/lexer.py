@@ -33,11 +33,11 @@ for _ch in b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789.+- \
 _PLAIN[VT] = _PLAIN[FF] = True
 # Upper-case letters; whitespace to 0 (dropped), everything else unchanged.
 _CANON = np.arange(256, dtype=np.uint8)
-_CANON[ord("a"): ord("z") + 1] -= 32
+_CANON[ord("a") : ord("z") + 1] -= 32
 for _ch in (SPACE, TAB, CR, VT, FF):
     _CANON[_ch] = 0
 _LETTER = np.zeros(256, dtype=bool)
-_LETTER[ord("A"): ord("Z") + 1] = True
+_LETTER[ord("A") : ord("Z") + 1] = True
 _NUMCHAR = np.zeros(256, dtype=bool)
 for _ch in b"0123456789.+-":
     _NUMCHAR[_ch] = True
@@ -100,8 +100,9 @@ class Source:
         return int(np.searchsorted(self.nl, pos, side="left"))
 
     def error(self, i: int, message: str, *, quote: bool = True) -> InputError:
-        return InputError(message, source=self.name, line=i + 1,
-                          text=self.text(i) if quote else None)
+        return InputError(
+            message, source=self.name, line=i + 1, text=self.text(i) if quote else None
+        )
 
 
 # ----------------------------------------------------------------------- checks
@@ -111,14 +112,20 @@ def check_bytes(src: Source) -> None:
     if buf.size == 0 or not np.any(buf > SPACE):
         raise InputError("empty file: no G-code in it", source=src.name)
     if b"\x00" in src.data:
-        raise src.error(src.line_of(src.data.index(b"\x00")),
-                        "binary file (NUL byte); not a G-code program", quote=False)
+        raise src.error(
+            src.line_of(src.data.index(b"\x00")),
+            "binary file (NUL byte); not a G-code program",
+            quote=False,
+        )
     lengths = src.ends - src.starts
     long_ = np.flatnonzero(lengths > MAX_LINE)
     if long_.size:
         i = int(long_[0])
-        raise src.error(i, f"line is {int(lengths[i])} characters long (limit {MAX_LINE}); "
-                        "not a G-code program", quote=False)
+        raise src.error(
+            i,
+            f"line is {int(lengths[i])} characters long (limit {MAX_LINE}); not a G-code program",
+            quote=False,
+        )
 
 
 # ----------------------------------------------------------------------- vectorised path
@@ -158,8 +165,9 @@ def _comment_mask(src: Source, special: NDArray[np.bool_]) -> NDArray[np.bool_] 
     return (depth > 0) | closes
 
 
-def _line_ranges(lfpos: NDArray[np.int64], size: int, lines: NDArray[np.int64]
-                 ) -> list[tuple[int, int]]:
+def _line_ranges(
+    lfpos: NDArray[np.int64], size: int, lines: NDArray[np.int64]
+) -> list[tuple[int, int]]:
     """[start, end) of the given lines in a buffer whose newlines are at ``lfpos``."""
     out = []
     for k in lines:
@@ -257,9 +265,11 @@ def _fromstring(sep: NDArray[np.uint8]) -> NDArray[np.float64] | None:
             return None
 
 
-def _well_formed(c: NDArray[np.uint8], s: NDArray[np.int64], e: NDArray[np.int64]
-                 ) -> NDArray[np.bool_]:
+def _well_formed(
+    c: NDArray[np.uint8], s: NDArray[np.int64], e: NDArray[np.int64]
+) -> NDArray[np.bool_]:
     """Spans ``c[s:e]`` of the form [+-]digits[.digits] or [+-].digits (error path only)."""
+
     def count(mask: NDArray[np.bool_]) -> NDArray[np.int64]:
         cs = np.concatenate([[0], np.cumsum(mask, dtype=np.int64)])
         return cs[e] - cs[s]
@@ -269,8 +279,9 @@ def _well_formed(c: NDArray[np.uint8], s: NDArray[np.int64], e: NDArray[np.int64
     n_sign = count(is_sign)
     n_digit = count((c >= ord("0")) & (c <= ord("9")))
     first_sign = is_sign[np.minimum(s, c.size - 1)]
-    return (n_digit + n_dot + n_sign == e - s) & (n_dot <= 1) & (n_sign == first_sign) & (
-        n_digit >= 1)
+    return (
+        (n_digit + n_dot + n_sign == e - s) & (n_dot <= 1) & (n_sign == first_sign) & (n_digit >= 1)
+    )
 
 
 _DIMENSION = np.zeros(256, dtype=bool)
@@ -278,8 +289,13 @@ for _ch in b"XYZIJKR":
     _DIMENSION[_ch] = True
 
 
-def _bare_integers(c: NDArray[np.uint8], s: NDArray[np.int64], e: NDArray[np.int64],
-                   letter: NDArray[np.uint8], value: NDArray[np.float64]) -> NDArray[np.bool_]:
+def _bare_integers(
+    c: NDArray[np.uint8],
+    s: NDArray[np.int64],
+    e: NDArray[np.int64],
+    letter: NDArray[np.uint8],
+    value: NDArray[np.float64],
+) -> NDArray[np.bool_]:
     """Dimension words with a nonzero integer value and no decimal point (see Words.bare)."""
     bare = np.zeros(s.size, dtype=bool)
     cand = np.flatnonzero(_DIMENSION[letter] & (value == np.round(value)) & (value != 0))
@@ -373,8 +389,9 @@ def tokenize_line(src: Source, i: int, words: Words) -> list[tuple[int, int, flo
         raise src.error(i, f"non-ASCII character {bad!r} outside a comment") from None
     ctrl = [ch for ch in stripped if ord(ch) < 32 and ch not in "\t\r\x0b\x0c"]
     if ctrl:
-        raise src.error(i, f"control character 0x{ord(ctrl[0]):02x}; not a G-code program",
-                        quote=False)
+        raise src.error(
+            i, f"control character 0x{ord(ctrl[0]):02x}; not a G-code program", quote=False
+        )
     up = stripped.upper()
     if "#" in up or "[" in up or "]" in up:
         raise src.error(i, "macro variables and expressions (#, [ ]) are not supported")
@@ -399,8 +416,10 @@ def tokenize_line(src: Source, i: int, words: Words) -> list[tuple[int, int, flo
                 words.keywords.append((i, name + "="))
             else:
                 raise src.error(
-                    i, f"assignment {name}={rhs} (parameters, IC()/AC(), system variables) "
-                    "is not supported")
+                    i,
+                    f"assignment {name}={rhs} (parameters, IC()/AC(), system variables) "
+                    "is not supported",
+                )
         elif m.group("colon"):
             rows.append((i, ord("N"), float(m.group("cnum")), False))
         elif m.group("bad"):
@@ -423,8 +442,7 @@ def _keyword(src: Source, i: int, kw: str, words: Words) -> None:
     if kw in W.ERROR_KEYWORDS:
         raise src.error(i, W.ERROR_KEYWORDS[kw])
     if kw in W.CONTROL_FLOW:
-        raise src.error(i, f"control flow or subprogram '{kw}' (O-words, macros) is not "
-                        "supported")
+        raise src.error(i, f"control flow or subprogram '{kw}' (O-words, macros) is not supported")
     if kw.startswith("CYCLE") or kw.startswith("POCKET") or kw.startswith("SLOT"):
         raise src.error(i, f"Siemens cycle call {kw} is not supported")
     if kw.startswith("SPLINE") or kw.endswith("SPLINE"):

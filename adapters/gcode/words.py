@@ -113,12 +113,18 @@ for _code in (38.2, 38.3, 38.4, 38.5):
 FANUC: dict[int, GCode] = {
     **COMMON,
     _c(80): GCode(Group.PASS),  # cancel canned cycle (its own modal group on Fanuc)
-    _c(5): GCode(Group.PASS, "G05 high-speed machining mode: the controller's look-ahead "
-                 "differs from the machine model"),
-    _c(5.1): GCode(Group.PASS, "G05.1 AI contour control: the controller's look-ahead "
-                   "differs from the machine model"),
-    _c(8): GCode(Group.PASS, "G08 look-ahead control: the controller's look-ahead differs "
-                 "from the machine model"),
+    _c(5): GCode(
+        Group.PASS,
+        "G05 high-speed machining mode: the controller's look-ahead differs from the machine model",
+    ),
+    _c(5.1): GCode(
+        Group.PASS,
+        "G05.1 AI contour control: the controller's look-ahead differs from the machine model",
+    ),
+    _c(8): GCode(
+        Group.PASS,
+        "G08 look-ahead control: the controller's look-ahead differs from the machine model",
+    ),
     _c(50): GCode(Group.PASS),  # cancel scaling
     _c(54.1): GCode(Group.WORK_OFFSET),
     _c(61.1): GCode(Group.PATH_MODE),
@@ -186,8 +192,14 @@ PLANE_NORMAL = {170: (0.0, 0.0, 1.0), 180: (0.0, 1.0, 0.0), 190: (1.0, 0.0, 0.0)
 EXACT_STOP_CODES = (610, 611, 600)
 #: units code -> (geometry in inch, feed in inch/min). Siemens G70/G71 change the
 #: geometry only; feeds stay in the basic system (assumed metric), G700/G710 change both.
-UNITS = {200: (True, True), 210: (False, False), 700: (True, False), 710: (False, False),
-         7000: (True, True), 7100: (False, False)}
+UNITS = {
+    200: (True, True),
+    210: (False, False),
+    700: (True, False),
+    710: (False, False),
+    7000: (True, True),
+    7100: (False, False),
+}
 
 # M-codes (integer numbers).
 M_STOP = {0, 1}  # program stop, optional stop: the machine comes to rest
@@ -201,18 +213,36 @@ M_ERRORS = {
 
 # Siemens keywords that do not change the path.
 PASS_KEYWORDS = {
-    "SOFT": "", "BRISK": "", "SOFTA": "", "BRISKA": "", "DRIVE": "", "DRIVEA": "",
-    "FFWON": "", "FFWOF": "", "CFC": "", "CFTCP": "", "CFIN": "", "CUT2D": "", "CUT2DF": "",
-    "CUT3DC": "", "TRAFOOF": "", "UPATH": "", "SPATH": "", "FNORM": "", "STOPRE": "",
-    "DIAMOF": "", "MSG": "", "WAITM": "",
+    "SOFT": "",
+    "BRISK": "",
+    "SOFTA": "",
+    "BRISKA": "",
+    "DRIVE": "",
+    "DRIVEA": "",
+    "FFWON": "",
+    "FFWOF": "",
+    "CFC": "",
+    "CFTCP": "",
+    "CFIN": "",
+    "CUT2D": "",
+    "CUT2DF": "",
+    "CUT3DC": "",
+    "TRAFOOF": "",
+    "UPATH": "",
+    "SPATH": "",
+    "FNORM": "",
+    "STOPRE": "",
+    "DIAMOF": "",
+    "MSG": "",
+    "WAITM": "",
     "COMPON": "the controller's compressor may merge short blocks into splines; "
-              "ncperf predicts without compression",
+    "ncperf predicts without compression",
     "COMPCURV": "the controller's compressor may merge short blocks into splines; "
-                "ncperf predicts without compression",
+    "ncperf predicts without compression",
     "COMPCAD": "the controller's compressor may merge short blocks into splines; "
-               "ncperf predicts without compression",
+    "ncperf predicts without compression",
     "COMPSURF": "the controller's compressor may merge short blocks into splines; "
-                "ncperf predicts without compression",
+    "ncperf predicts without compression",
     "COMPOF": "",
     "FLIN": "feed profile FLIN/FCUB changes the feed inside blocks; not modelled",
     "FCUB": "feed profile FLIN/FCUB changes the feed inside blocks; not modelled",
@@ -236,10 +266,35 @@ ERROR_KEYWORDS = {
     "AMIRROR": "Siemens frame AMIRROR is not supported",
     "G41": "cutter compensation is not supported",
 }
-CONTROL_FLOW = ("IF", "ELSE", "ENDIF", "WHILE", "ENDWHILE", "DO", "REPEAT", "UNTIL", "LOOP",
-                "ENDLOOP", "FOR", "ENDFOR", "GOTO", "GOTOF", "GOTOB", "GOTOC", "CALL", "PCALL",
-                "MCALL", "DEF", "PROC", "RET", "SUB", "ENDSUB", "RETURN", "CASE", "BREAK",
-                "CONTINUE")
+CONTROL_FLOW = (
+    "IF",
+    "ELSE",
+    "ENDIF",
+    "WHILE",
+    "ENDWHILE",
+    "DO",
+    "REPEAT",
+    "UNTIL",
+    "LOOP",
+    "ENDLOOP",
+    "FOR",
+    "ENDFOR",
+    "GOTO",
+    "GOTOF",
+    "GOTOB",
+    "GOTOC",
+    "CALL",
+    "PCALL",
+    "MCALL",
+    "DEF",
+    "PROC",
+    "RET",
+    "SUB",
+    "ENDSUB",
+    "RETURN",
+    "CASE",
+    "BREAK",
+    "CONTINUE",
+)
 #: Siemens assignments that do not change the path (smoothing distances, tolerances).
-PASS_ASSIGNMENTS = {"ADIS": "", "ADISPOS": "", "CTOL": "", "OTOL": "", "ATOL": "",
-                    "SD": ""}
+PASS_ASSIGNMENTS = {"ADIS": "", "ADISPOS": "", "CTOL": "", "OTOL": "", "ATOL": "", "SD": ""}

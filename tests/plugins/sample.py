@@ -40,8 +40,16 @@ def ncperf_extract(source, options):
 def ncperf_evaluate(toolpath, machine):
     i = np.flatnonzero(toolpath.is_arc)
     cap = np.sqrt(machine.max_acceleration.min() * toolpath.radius[i])
-    return [Indicator(name=NAME, at="element", index=i, feed=cap,
-                      limit=np.zeros(i.size, dtype=np.int64), labels=("centripetal acceleration",))]
+    return [
+        Indicator(
+            name=NAME,
+            at="element",
+            index=i,
+            feed=cap,
+            limit=np.zeros(i.size, dtype=np.int64),
+            labels=("centripetal acceleration",),
+        )
+    ]
 
 
 @hookimpl
