@@ -9,6 +9,7 @@ program line.
 
 from __future__ import annotations
 
+import os
 from dataclasses import dataclass
 
 import numpy as np
@@ -38,16 +39,17 @@ class FileTarget:
 
     Attributes
     ----------
-    path : str
-        Output file; its extension picks the display (``.svg`` ...).
+    path : str or os.PathLike
+        Output file; its extension picks the display (``.svg`` ...). Kept as ``str``.
     view : {"xy", "xz", "yz", "iso"}
         Top view (xy, default), front (xz), side (yz) or isometric.
     """
 
-    path: str
+    path: str | os.PathLike[str]
     view: str = "xy"
 
     def __post_init__(self) -> None:
+        object.__setattr__(self, "path", os.fspath(self.path))
         if self.view not in VIEWS:
             raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
 
@@ -118,17 +120,20 @@ class Annotations:
     machine : str
         Machine name.
     move_class : (n,) int8
-        Reduction class 0..5 of each block's own predicted feed; -1 for rapids.
+        Reduction class 0..5 of each block's own predicted feed (5 is the worst); -1 for
+        rapids.
     junction : (m,) int
         Junctions an indicator reported (the point is the end of move j).
     junction_class : (m,) int8
         Their reduction class.
     junction_feed : (m,) float, mm/s
         Their predicted feed.
+    junction_reduction : (m,) float
+        1 - predicted / programmed feed (the smaller of the two blocks' F), 0..1.
     junction_cause, junction_limit : (m,) int
         Indices into ``indicator_names`` and ``labels`` of what binds.
     length_class : (n,) int8
-        0: shorter than L, 1: L..2L, 2: 2L and longer; -1 for rapids.
+        0: shorter than L (the worst), 1: L..2L, 2: 2L and longer; -1 for rapids.
     zones : tuple of Zone
         The worst zones, worst first.
     indicator_names : tuple of str
@@ -150,6 +155,7 @@ class Annotations:
     junction: NDArray[np.int64]
     junction_class: NDArray[np.int8]
     junction_feed: NDArray[np.float64]
+    junction_reduction: NDArray[np.float64]
     junction_cause: NDArray[np.int64]
     junction_limit: NDArray[np.int64]
     length_class: NDArray[np.int8]
@@ -315,6 +321,7 @@ def build_annotations(ev: Evaluation, *, zones: int = 10) -> Annotations:
         junction=ev.junction,
         junction_class=reduction_class(ev.junction_reduction),
         junction_feed=ev.junction_feed,
+        junction_reduction=ev.junction_reduction,
         junction_cause=ev.junction_indicator,
         junction_limit=ev.junction_limit,
         length_class=length_class(ev),

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -136,27 +137,7 @@ def test_model1_uses_program_tolerance(models):
     # TIT 0.1 mm at 90 deg: R = 0.241421 mm; acceleration binds with high jerk:
     # sqrt(2500 * 0.2414214) = 24.56745 mm/s.
     tp = path([{"end": (10, 0, 0)}, {"end": (10, 10, 0)}], feed=100.0)
-    cols = {
-        k: getattr(tp, k)
-        for k in (
-            "kind",
-            "start",
-            "end",
-            "center",
-            "normal",
-            "sweep",
-            "feed",
-            "line",
-            "block",
-            "tool",
-            "path_mode",
-            "dwell",
-            "op_offsets",
-        )
-    }
-    from core import ToolPath
-
-    tp2 = ToolPath(**cols, tolerance=np.array([0.1, 0.1]))
+    tp2 = dataclasses.replace(tp, tolerance=np.array([0.1, 0.1]))
     ev = models.evaluate(tp2, machine(jerk=(1e6, 1e6, 1e6)))
     assert _junction(ev, 0)[0] == pytest.approx(math.sqrt(2500 * 0.1 * 2.414213562373095))
 
@@ -297,26 +278,7 @@ def test_eq16_paper_time(models):
 def test_exact_stop_and_dwell(models):
     """G61/G9 blocks and dwells end at rest: predicted junction feed 0, named as such."""
     tp = path([{"end": (10, 0, 0)}, {"end": (20, 0, 0)}, {"end": (30, 0, 0)}], feed=100.0)
-    cols = {
-        k: getattr(tp, k)
-        for k in (
-            "kind",
-            "start",
-            "end",
-            "center",
-            "normal",
-            "sweep",
-            "feed",
-            "line",
-            "block",
-            "tool",
-            "tolerance",
-            "op_offsets",
-        )
-    }
-    from core import ToolPath
-
-    tp2 = ToolPath(**cols, path_mode=np.array([1, 0, 0]), dwell=np.array([0.0, 2.0, 0.0]))
+    tp2 = dataclasses.replace(tp, path_mode=np.array([1, 0, 0]), dwell=np.array([0.0, 2.0, 0.0]))
     ev = models.evaluate(tp2, machine())
     assert list(ev.junction) == [0, 1]
     assert list(ev.junction_feed) == [0.0, 0.0]

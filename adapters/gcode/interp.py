@@ -8,6 +8,7 @@ Nothing loops over moves in Python.
 
 from __future__ import annotations
 
+import dataclasses
 from collections import defaultdict
 from pathlib import Path
 
@@ -554,13 +555,7 @@ class Interpreter:
             )
         if tp.n == 0:
             raise _no_moves(self.src)
-        return ToolPath(
-            **{k: getattr(tp, k) for k in cols},
-            op_names=tp.op_names,
-            source=tp.source,
-            notices=self.notes.notices(),
-            units=tp.units,
-        )
+        return dataclasses.replace(tp, notices=self.notes.notices())
 
     def _arcs(self, cols: dict, mi: NDArray[np.int64]) -> None:
         arc_l = np.flatnonzero(self.arc[mi])

@@ -637,9 +637,7 @@ def markers(st: Strokes, tp: ToolPath, ann: Annotations) -> tuple[list[bytes], i
     j, jc, feed, pos = j[kept], jc[kept], feed[kept], pos[kept]
     cause = np.asarray(ann.junction_cause, dtype=np.int64)[sel][kept]
     limit = np.asarray(ann.junction_limit, dtype=np.int64)[sel][kept]
-    prog = np.fmin(tp.feed[j], tp.feed[j + 1])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        red = np.nan_to_num(np.clip(1.0 - feed / prog, 0.0, 1.0))
+    red = np.nan_to_num(np.asarray(ann.junction_reduction, dtype=np.float64)[sel][kept])
     pct = -np.rint(100.0 * red).astype(np.int64)
     mm_min = np.rint(np.nan_to_num(feed) * 60.0).astype(np.int64)
 
@@ -821,7 +819,13 @@ def _check(tp: ToolPath, ann: Annotations) -> None:
                 f"annotations.{name} must have shape ({n},) like the tool path, got {shape}"
             )
     m = np.shape(ann.junction)
-    for name in ("junction_class", "junction_feed", "junction_cause", "junction_limit"):
+    for name in (
+        "junction_class",
+        "junction_feed",
+        "junction_reduction",
+        "junction_cause",
+        "junction_limit",
+    ):
         if np.shape(getattr(ann, name)) != m:
             raise ValueError(
                 f"annotations.{name} must have shape {m} like annotations.junction, "
