@@ -503,3 +503,11 @@ def test_extract_hook_recognises_by_extension_and_content(tmp_path):
     assert gcode.ncperf_extract(source=object(), options=opts) is None
     with pytest.raises(InputError, match="cannot read"):
         gcode.ncperf_extract(source=str(tmp_path / "missing.nc"), options=opts)
+
+
+def test_line_endings():
+    """CRLF (Windows) and CR-only (old Mac) line ends read like LF."""
+    lf = read("G21\nG1 X1 F60\nX2\n")
+    for text in ("G21\r\nG1 X1 F60\r\nX2\r\n", "G21\rG1 X1 F60\rX2\r"):
+        tp = read(text)
+        assert np.array_equal(tp.end, lf.end) and list(tp.line) == [2, 3]

@@ -79,6 +79,8 @@ class Source:
 
     def __init__(self, name: str, data: bytes) -> None:
         self.name = name
+        if b"\n" not in data and b"\r" in data:
+            data = data.replace(b"\r", b"\n")  # old Mac line ends: CR only
         self.data = data
         buf = np.frombuffer(data, dtype=np.uint8)
         self.buf = buf
