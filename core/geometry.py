@@ -54,6 +54,24 @@ def angle_between(a: NDArray[np.float64], b: NDArray[np.float64]) -> NDArray[np.
     return np.arctan2(norm(np.cross(a, b)), dot(a, b))
 
 
+def max_share(a: ArrayLike, b: ArrayLike, sweep: ArrayLike) -> NDArray[np.float64]:
+    """max over phi in [0, sweep] of |a cos(phi) + b sin(phi)|, elementwise.
+
+    The function is sqrt(a^2 + b^2) cos(phi - phi0) with phi0 = atan2(b, a); its absolute
+    value peaks where phi = phi0 (mod pi). If such an angle lies in the sweep the peak is
+    the answer, else the larger of the two ends. This is an axis's largest share of a
+    direction that turns by ``sweep`` in a plane (a, b: the axis's components of the
+    direction at phi = 0 and of its in-plane perpendicular).
+    """
+    a = np.asarray(a, dtype=np.float64)
+    b = np.asarray(b, dtype=np.float64)
+    sweep = np.asarray(sweep, dtype=np.float64)
+    peak = np.hypot(a, b)
+    phi_peak = np.mod(np.arctan2(b, a), np.pi)
+    at_end = np.maximum(np.abs(a), np.abs(a * np.cos(sweep) + b * np.sin(sweep)))
+    return np.where(phi_peak <= sweep, peak, at_end)
+
+
 def radial(
     points: NDArray[np.float64], center: NDArray[np.float64], normal: NDArray[np.float64]
 ) -> NDArray[np.float64]:

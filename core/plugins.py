@@ -25,6 +25,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "plugins.curvature",
     "plugins.ncu_capacity",
     "plugins.exact_stop",
+    "plugins.feed_limit",
 )
 
 DISABLE_ENV = "NCPERF_DISABLE_PLUGINS"

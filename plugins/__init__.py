@@ -4,4 +4,5 @@
 * :mod:`plugins.curvature` -- model 2, curvature discontinuities (eq. 11-15)
 * :mod:`plugins.ncu_capacity` -- model 3, block cycle time (eq. 16)
 * :mod:`plugins.exact_stop` -- exact stops and dwells the program asks for
+* :mod:`plugins.feed_limit` -- no block faster than its axes' feed limits
 """

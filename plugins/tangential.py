@@ -78,16 +78,6 @@ def inserted_radius(
     return np.maximum(np.fmin(r_tol, r_len), 0.0)
 
 
-def max_share(
-    a: NDArray[np.float64], b: NDArray[np.float64], sweep: NDArray[np.float64]
-) -> NDArray[np.float64]:
-    """max over phi in [0, sweep] of |a cos(phi) + b sin(phi)|, elementwise."""
-    peak = np.hypot(a, b)
-    phi_peak = np.mod(np.arctan2(b, a), np.pi)
-    at_end = np.maximum(np.abs(a), np.abs(a * np.cos(sweep) + b * np.sin(sweep)))
-    return np.where(phi_peak <= sweep, peak, at_end)
-
-
 def _in_plane_normal(t1: NDArray[np.float64], t2: NDArray[np.float64]) -> NDArray[np.float64]:
     """Unit u perpendicular to t1 in the plane (t1, t2), pointing towards t2."""
     u = t2 - g.dot(t1, t2)[:, None] * t1
@@ -126,8 +116,8 @@ def corner_feed(
     beta = g.angle_between(t1, t2)
     u = _in_plane_normal(t1, t2)
     b = beta[:, None]
-    share_t = max_share(t1, u, b)
-    share_n = max_share(u, -t1, b)
+    share_t = g.max_share(t1, u, b)
+    share_n = g.max_share(u, -t1, b)
     R = radius[:, None]
     inf = np.inf
     # An axis with no share over the arc sets no limit.

@@ -14,7 +14,13 @@ from core.toolpath import MoveKind, empty_columns
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("NCPERF_SHARED", ROOT.parent / "shared"))
 
-MODELS = ("plugins.tangential", "plugins.curvature", "plugins.ncu_capacity", "plugins.exact_stop")
+MODELS = (
+    "plugins.tangential",
+    "plugins.curvature",
+    "plugins.ncu_capacity",
+    "plugins.exact_stop",
+    "plugins.feed_limit",
+)
 
 
 def shared(*parts: str) -> Path:

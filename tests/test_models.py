@@ -8,6 +8,7 @@ import math
 import numpy as np
 import pytest
 
+from core import geometry as g
 from plugins import curvature, tangential
 from tests.conftest import machine, path
 
@@ -124,11 +125,11 @@ def test_model1_max_share_peak_inside_and_outside():
     # s = 90 deg the ends give cos 10 = 0.98481 and |cos 100| = 0.17365.
     s90 = np.array([math.pi / 2])
     s30 = np.array([math.pi / 6])
-    assert tangential.max_share(np.array([1.0]), np.array([0.0]), s90)[0] == 1.0
-    assert tangential.max_share(np.array([0.0]), np.array([1.0]), s90)[0] == pytest.approx(1.0)
-    assert tangential.max_share(np.array([0.0]), np.array([1.0]), s30)[0] == pytest.approx(0.5)
+    assert g.max_share(np.array([1.0]), np.array([0.0]), s90)[0] == 1.0
+    assert g.max_share(np.array([0.0]), np.array([1.0]), s90)[0] == pytest.approx(1.0)
+    assert g.max_share(np.array([0.0]), np.array([1.0]), s30)[0] == pytest.approx(0.5)
     a, b = math.cos(math.radians(10)), -math.sin(math.radians(10))
-    got = tangential.max_share(np.array([a]), np.array([b]), s90)[0]
+    got = g.max_share(np.array([a]), np.array([b]), s90)[0]
     assert got == pytest.approx(0.984807753, rel=1e-9)
 
 
@@ -283,3 +284,33 @@ def test_exact_stop_and_dwell(models):
     assert list(ev.junction) == [0, 1]
     assert list(ev.junction_feed) == [0.0, 0.0]
     assert [ev.labels[k] for k in ev.junction_limit] == ["exact stop", "dwell"]
+
+
+# ----------------------------------------------------------------------------- feed limit
+def test_feed_limit_on_a_line(models):
+    """A line at 30 deg in XY: V <= min(Vmax_X / cos30, Vmax_Y / sin30) = min(577.35, 800)."""
+    # Vmax_X 30 m/min = 500 mm/s, Vmax_Y 24 m/min = 400 mm/s: 500/0.866 = 577.35 (X binds).
+    c, s = math.cos(math.radians(30)), math.sin(math.radians(30))
+    tp = path([{"end": (10 * c, 10 * s, 0)}], feed=1000.0)
+    ev = models.evaluate(tp, machine(feed=(30.0, 24.0, 30.0)))
+    assert ev.element_feed[0] == pytest.approx(500 / c)
+    assert ev.labels[ev.element_limit[0]] == "feed X"
+    assert ev.indicator_names[ev.element_indicator[0]] == "feed_limit"
+
+
+def test_feed_limit_on_an_arc(models):
+    """A quarter arc whose tangent turns from (0, 1) to (-1, 0): Y's share is 1 at the start,
+    X's 1 at the end, so the cap is min(500 / 1, 400 / 1) = 400 mm/s (Y)."""
+    tp = path(
+        [{"start": (5, 0, 0), "end": (0, 5, 0), "center": (0, 0, 0), "ccw": True}], feed=1000.0
+    )
+    ev = models.evaluate(tp, machine(feed=(30.0, 24.0, 30.0)))
+    assert ev.element_feed[0] == pytest.approx(400.0)
+    assert ev.labels[ev.element_limit[0]] == "feed Y"
+
+
+def test_feed_limit_does_not_touch_reachable_feeds(models):
+    """A block programmed below its axes' limits is not reported."""
+    tp = path([{"end": (10, 0, 0)}], feed=100.0)
+    ev = models.evaluate(tp, machine())
+    assert ev.element_indicator[0] == -1

@@ -1,0 +1,59 @@
+"""The axes' feed limits on every block: no block runs faster than its axes allow.
+
+Not one of the paper's three models, but eq. (6) already bounds the feed by Vmax at
+discontinuities, and a controller clamps any block programmed above what its axes can do:
+axis k moves at V |t_k|, so V <= min_k Vmax_k / max |t_k| over the block. Lines have one
+direction; for arcs the planar part of the tangent turns with the sweep (its largest share
+per axis as in model 1) and a helix adds its constant rise, bounded by adding its share.
+"""
+
+from __future__ import annotations
+
+import numpy as np
+
+from core import Indicator, Machine, ToolPath, hookimpl
+from core import geometry as g
+
+NAME = "feed_limit"
+LABELS = ("feed X", "feed Y", "feed Z")
+
+
+def axis_shares(tp: ToolPath) -> np.ndarray:
+    """(n, 3) largest share of each axis in the tangent over each move."""
+    share = np.abs(tp.tangent_start)
+    a = np.flatnonzero(tp.is_arc)
+    if a.size:
+        n = tp.normal[a]
+        c = tp.pitch[a]
+        r = tp.radius[a]
+        h = np.hypot(r, c)
+        t0 = tp.tangent_start[a]
+        planar = g.unit(t0 - g.dot(t0, n)[:, None] * n)  # in-plane tangent at the start
+        ccw = (tp.kind[a] == 3)[:, None]
+        turned = np.where(ccw, np.cross(n, planar), -np.cross(n, planar))  # at +90 deg
+        inplane = g.max_share(planar, turned, tp.sweep[a][:, None]) * (r / h)[:, None]
+        share[a] = np.minimum(inplane + np.abs(n * (c / h)[:, None]), 1.0)
+    return share
+
+
+@hookimpl
+def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
+    """Cap feed blocks programmed above min_k Vmax_k / (share of axis k)."""
+    tp = toolpath
+    i = np.flatnonzero(tp.is_feed)
+    share = axis_shares(tp)[i]
+    with np.errstate(divide="ignore"):
+        per_axis = np.where(share > 0, machine.max_feed / share, np.inf)
+    axis = np.argmin(per_axis, axis=1)
+    cap = per_axis[np.arange(i.size), axis]
+    over = cap < tp.feed[i]
+    return [
+        Indicator(
+            name=NAME,
+            at="element",
+            index=i[over],
+            feed=cap[over],
+            limit=axis[over],
+            labels=LABELS,
+        )
+    ]
