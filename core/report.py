@@ -124,14 +124,14 @@ def summary(an: Analysis, *, machine_note: str = "") -> str:
     else:
         lines.append(
             f"    {'#':>2s}  {'lines':13s} {'extent':>9s} {'slow pts':>8s} {'worst':>6s} "
-            f"{'min feed':>22s} {'cost':>8s}  cause"
+            f"{'min feed':>22s} {'cost':>9s}  cause"
         )
         for z in ann.zones:
             feed = f"{z.min_feed * PER_MIN:,.0f} of F{z.programmed_feed * PER_MIN:,.0f}"
             lines.append(
                 f"    {z.rank:2d}  {z.lines:13s} {z.length:6.1f} mm "
                 f"{z.discontinuities + z.capped_blocks:8d} {-z.worst_reduction * 100:5.0f}% "
-                f"{feed:>15s} mm/min {z.time_lost:6.2f} s  {z.cause}"
+                f"{feed:>15s} mm/min {z.time_lost:7.3f} s  {z.cause}"
             )
     return "\n".join(lines)
 
