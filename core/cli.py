@@ -31,7 +31,7 @@ def demo_program() -> str:
     return str(resources.files("examples") / DEMO_PROGRAM)
 
 
-def _parser() -> argparse.ArgumentParser:
+def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     p = argparse.ArgumentParser(
         prog="ncperf",
         description="Predict where a machine tool will fall below the programmed feed, and why "
@@ -42,6 +42,7 @@ def _parser() -> argparse.ArgumentParser:
     sub.required = True
 
     a = sub.add_parser("analyze", help="predicted feed reduction of a program, and why")
+    a.set_defaults(run=cmd_analyze)
     a.add_argument("program", nargs="?", help="tool path file (G-code); none: the bundled demo")
     a.add_argument("--demo", action="store_true", help="run on the bundled Z-level demo program")
     a.add_argument(
@@ -63,8 +64,11 @@ def _parser() -> argparse.ArgumentParser:
         help="skip blocks starting with '/' (block-delete switch on)",
     )
 
-    sub.add_parser("machines", help="list machine presets (the names --machine takes)")
-    sub.add_parser("plugins", help="list registered plugins and the hooks they implement")
+    m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
+    m.set_defaults(run=cmd_machines)
+    pl = sub.add_parser("plugins", help="list registered plugins and the hooks they implement")
+    pl.set_defaults(run=cmd_plugins)
+    nc.add_commands(sub)
     return p
 
 
@@ -83,7 +87,7 @@ def _print_notices(tp_notices: tuple, stream) -> None:
         print(f"... and {len(tp_notices) - MAX_NOTICES} more warnings", file=stream)
 
 
-def cmd_analyze(args: argparse.Namespace) -> int:
+def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
     demo = args.demo or args.program is None
     if args.demo and args.program:
         raise UsageError("give a program or --demo, not both")
@@ -93,7 +97,6 @@ def cmd_analyze(args: argparse.Namespace) -> int:
         _check_output(out)
     machine = resolve_machine(args.machine)
     note = "" if args.machine else f" [preset {DEFAULT_PRESET}, the default; --machine to choose]"
-    nc = Ncperf()
     analysis = nc.analyze(
         program, machine, ExtractOptions(dialect=args.dialect, block_delete=args.block_delete)
     )
@@ -110,7 +113,7 @@ def cmd_analyze(args: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_machines(_: argparse.Namespace) -> int:
+def cmd_machines(_: argparse.Namespace, nc: Ncperf) -> int:
     for name in preset_names():
         m = load_preset(name)
         default = "  (default)" if name == DEFAULT_PRESET else ""
@@ -118,20 +121,22 @@ def cmd_machines(_: argparse.Namespace) -> int:
     return 0
 
 
-def cmd_plugins(_: argparse.Namespace) -> int:
-    for name, hooks in Ncperf().plugins():
+def cmd_plugins(_: argparse.Namespace, nc: Ncperf) -> int:
+    for name, hooks in nc.plugins():
         print(f"{name}\t{', '.join(hooks)}")
     return 0
 
 
-COMMANDS = {"analyze": cmd_analyze, "machines": cmd_machines, "plugins": cmd_plugins}
-
-
 def main(argv: list[str] | None = None) -> int:
-    parser = _parser()
+    try:
+        nc = Ncperf()
+    except NcperfError as exc:
+        print(f"ncperf: {exc}", file=sys.stderr)
+        return 2
+    parser = _parser(nc)
     args = parser.parse_args(argv)
     try:
-        return COMMANDS[args.command](args)
+        return int(args.run(args, nc))
     except UsageError as exc:
         print(f"ncperf: {exc}", file=sys.stderr)
         return 2

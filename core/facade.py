@@ -5,6 +5,7 @@ It runs the paper's three tasks in order: A1 extract -> A2 evaluate -> A3 displa
 
 from __future__ import annotations
 
+import argparse
 from dataclasses import dataclass
 
 import pluggy
@@ -89,6 +90,11 @@ class Ncperf:
         """The paper's Figure 5: extract, evaluate, display."""
         analysis = self.analyze(source, machine, options)
         return analysis, self.display(analysis.toolpath, analysis.annotations, target)
+
+    # command line
+    def add_commands(self, subparsers: argparse._SubParsersAction) -> None:
+        """Let plugins add ``ncperf`` subcommands."""
+        self.pm.hook.ncperf_add_commands(subparsers=subparsers)
 
     # introspection
     def implementers(self, hook: str) -> list[str]:

@@ -11,6 +11,7 @@ by keyword, through :class:`core.facade.Ncperf` only.
 
 from __future__ import annotations
 
+import argparse
 from typing import TYPE_CHECKING
 
 import pluggy
@@ -69,4 +70,17 @@ def ncperf_display(toolpath: ToolPath, annotations: Annotations, target: object)
     :param target: a file path (``str`` or ``os.PathLike``, e.g. ``out.svg``)
         or a host document.
     :returns: what was written (e.g. the file path), or None.
+    """
+
+
+@hookspec
+def ncperf_add_commands(subparsers: argparse._SubParsersAction) -> None:
+    """Add subcommands to the ``ncperf`` command line (e.g. ``ncperf esprit``).
+
+    Each subparser sets ``set_defaults(run=FUNCTION)``; the CLI calls
+    ``FUNCTION(args, nc)`` with the parsed arguments and the :class:`~core.facade.Ncperf`
+    facade, and exits with the int it returns.
+
+    :param subparsers: the ``argparse`` sub-parser collection of ``ncperf``.
+    :returns: nothing.
     """

@@ -20,6 +20,8 @@ from core.errors import UsageError
 #: Built-in plugins, by module name; registered under that name.
 BUILTIN_PLUGINS: tuple[str, ...] = (
     "adapters.gcode",
+    "adapters.cl_data",
+    "adapters.esprit_com",
     "adapters.svg",
     "plugins.tangential",
     "plugins.curvature",

@@ -184,5 +184,19 @@ def test_every_hook_is_documented_and_tested(hook):
         "ncperf_extract": "extract(",
         "ncperf_evaluate": "evaluate(",
         "ncperf_display": "display(",
+        "ncperf_add_commands": "add_commands(",
     }[hook]
     assert f"nc.{method}" in tests
+
+
+def test_plugin_adds_a_command(capsys):
+    """A plugin's ncperf_add_commands subcommand runs through the CLI with the facade."""
+    import argparse
+
+    nc = Ncperf(make_plugin_manager(entry_points=False, extra=[sample]))
+    parser = argparse.ArgumentParser(prog="ncperf")
+    sub = parser.add_subparsers(dest="command")
+    nc.add_commands(sub)
+    args = parser.parse_args(["sample", "--echo", "yo"])
+    assert args.run(args, nc) == 0
+    assert "echo yo" in capsys.readouterr().out

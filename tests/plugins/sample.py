@@ -58,3 +58,15 @@ def ncperf_display(toolpath, annotations, target):
         return None
     target.drawn.append((toolpath.n, annotations.move_class.tolist()))
     return target
+
+
+def _run_sample(args, nc):
+    print(f"sample plugin: {len(nc.plugins())} plugins, echo {args.echo}")
+    return 0
+
+
+@hookimpl
+def ncperf_add_commands(subparsers):
+    p = subparsers.add_parser("sample", help="a command added by the sample plugin")
+    p.add_argument("--echo", default="hi")
+    p.set_defaults(run=_run_sample)
