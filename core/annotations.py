@@ -16,6 +16,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.indicators import REDUCTION_LABELS, Evaluation, reduction_class
+from core.profile import Profile, build_profile
 
 #: Colours of the reduction classes, green (0-10 %) to red (> 90 %), as in Figure 11.
 REDUCTION_COLOURS = ("#1a9850", "#91cf60", "#d9ef8b", "#fdae61", "#f46d43", "#d73027")
@@ -56,19 +57,21 @@ class FileTarget:
 
 @dataclass(frozen=True)
 class Zone:
-    """A cluster of slow points: junctions and capped blocks close enough together that the
-    machine cannot regain the programmed feed between them.
+    """A stretch of the path the predicted profile keeps below 90 % of the programmed feed
+    around slow points (see :func:`find_zones`).
 
     Attributes
     ----------
     rank : int
         1 = worst (most time lost).
     first, last : int
-        First and last move index involved.
+        First and last move index involved (the moves braking into and accelerating out
+        of the zone included).
     line_first, line_last : int
         Lowest and highest source line involved.
     length : float, mm
-        Path length from the first slow point to the last (0 for a single corner).
+        Path length of the zone: its moves, plus the braking end and accelerating start of
+        the moves around it.
     discontinuities : int
         Junctions in the zone predicted >= ZONE_THRESHOLD below F.
     capped_blocks : int
@@ -82,8 +85,8 @@ class Zone:
     cause : str
         Indicator and limit of the minimum, e.g. "tangential: jerk X".
     time_lost : float, s
-        Rough cost: each slow point braked into and left at the machine's lowest axis
-        acceleration A, (F - v)^2 / (A F), plus the slower traverse of capped blocks.
+        Predicted time of the zone's moves minus their length / F (the profile's braking,
+        slow crossing and re-acceleration).
     point : (3,) float, mm
         Where the minimum is (for labels).
     """
@@ -170,125 +173,104 @@ class Annotations:
     rapid_colour: str = RAPID_COLOUR
 
 
-def _gap_loss(d: NDArray, v1: NDArray, v2: NDArray, f: NDArray, acc: float) -> NDArray:
-    """Extra time (s) over distance d (mm) from speed v1 to v2 (mm/s), accelerating at most
-    at ``acc`` and never above f, compared with running it at f (trapezoid, exact)."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        peak = np.minimum(f, np.sqrt(acc * d + 0.5 * (v1**2 + v2**2)))
-        feasible = peak >= np.maximum(v1, v2)
-        ramps = (2 * peak - v1 - v2) / acc
-        cruise = (d - (2 * peak**2 - v1**2 - v2**2) / (2 * acc)) / peak
-        t = np.where(feasible, ramps + cruise, 2 * d / (v1 + v2))
-        out = t - d / f
-    return np.nan_to_num(np.maximum(out, 0.0), posinf=0.0)
-
-
-def find_zones(ev: Evaluation, count: int = 10) -> tuple[Zone, ...]:
+def find_zones(ev: Evaluation, profile: Profile, count: int = 10) -> tuple[Zone, ...]:
     """The ``count`` zones that cost the most time.
 
-    Slow points are junctions predicted at least ZONE_THRESHOLD below the programmed feed
-    and blocks whose own feed is capped that much. Consecutive slow points join one zone
-    when the path between them is shorter than F^2 / (2 A) -- the distance the machine
-    needs to regain the feed F from a stop at its lowest axis acceleration A -- and no
-    rapid or operation change lies between. Zones are ranked by ``Zone.time_lost``.
+    Moves whose predicted speed reaches (1 - ZONE_THRESHOLD) of the programmed feed, and
+    rapids, separate zones: a zone is what lies between two of them -- the braking end of
+    the first, every move in between (all kept below 90 % of F), the accelerating start of
+    the second. A zone is listed if it holds at least one slow point of the evaluation (a
+    junction or a block predicted ZONE_THRESHOLD or more below F); stretches slowed only by
+    starting and stopping (program ends, rapids, dwells) are not zones, though their time
+    is in the cycle time all the same. Zones are ranked by the time the profile loses on
+    them against length / F.
     """
     tp = ev.toolpath
     if tp.n == 0:
         return ()
-    acc = float(np.min(ev.machine.max_acceleration))
-    s_end = np.cumsum(tp.length)
-    s_start = s_end - tp.length
-    # Events: slow junctions (a point at the end of move j) and capped blocks (a span).
+    feed = tp.is_feed
+    t_up, t_dn, d_up, d_dn, _ = profile._phases
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fast = ~feed | (profile.v_peak >= (1.0 - ZONE_THRESHOLD) * tp.feed)
+        lost_up = np.where(feed, t_up - d_up / tp.feed, 0.0)
+        lost_dn = np.where(feed, t_dn - d_dn / tp.feed, 0.0)
+    brk = np.flatnonzero(fast)
+    n_z = brk.size + 1
+    # Zone of each move: zone m lies between break m-1 and break m.
+    zone_of = np.searchsorted(brk, np.arange(tp.n), side="left")
+    inner = ~fast
+    lost = np.bincount(zone_of[inner], weights=profile.lost_time[inner], minlength=n_z)
+    length = np.bincount(zone_of[inner], weights=tp.length[inner], minlength=n_z)
+    # Breaks: their accelerating start ends zone m, their braking end opens zone m + 1.
+    m = np.arange(brk.size)
+    np.add.at(lost, m, lost_up[brk])
+    np.add.at(lost, m + 1, lost_dn[brk])
+    np.add.at(length, m, np.where(feed[brk], d_up[brk], 0.0))
+    np.add.at(length, m + 1, np.where(feed[brk], d_dn[brk], 0.0))
+    # Move range of each zone: from the break before to the break after (where they brake
+    # or accelerate), clipped to the program.
+    first = np.concatenate([[0], brk])
+    last = np.concatenate([brk, [tp.n - 1]])
+
+    # Slow points of the evaluation, each with its zone.
     jsel = np.flatnonzero(ev.junction_reduction >= ZONE_THRESHOLD)
-    esel = np.flatnonzero(tp.is_feed & (np.nan_to_num(ev.element_reduction) >= ZONE_THRESHOLD))
     jm = ev.junction[jsel]
-    n_j = jsel.size
-    first_move = np.concatenate([jm, esel])
-    last_move = np.concatenate([jm + 1, esel])
-    pos_a = np.concatenate([s_end[jm], s_start[esel]])
-    pos_b = np.concatenate([s_end[jm], s_end[esel]])
-    v = np.concatenate([ev.junction_feed[jsel], ev.element_feed[esel]])
-    f = np.concatenate([ev.junction_programmed[jsel], tp.feed[esel]])
-    if v.size == 0:
-        return ()
-    is_j = np.arange(v.size) < n_j
-    cause = np.concatenate(
+    j_zone = np.where(fast[jm], zone_of[jm] + 1, zone_of[jm])
+    esel = np.flatnonzero(feed & (np.nan_to_num(ev.element_reduction) >= ZONE_THRESHOLD))
+    e_zone = zone_of[esel] + fast[esel]
+    ratio = np.concatenate(
         [
-            ev.junction_indicator[jsel] * 10_000 + ev.junction_limit[jsel],
-            ev.element_indicator[esel] * 10_000 + ev.element_limit[esel],
+            ev.junction_feed[jsel] / ev.junction_programmed[jsel],
+            ev.element_feed[esel] / tp.feed[esel],
         ]
     )
+    pt_zone = np.concatenate([j_zone, e_zone])
+    is_j = np.arange(ratio.size) < jsel.size
+    points = np.bincount(pt_zone, minlength=n_z)
+    n_j = np.bincount(pt_zone[is_j], minlength=n_z)
+    # The worst point of each zone: sort by (zone, ratio), take the first of each zone.
+    order = np.lexsort((ratio, pt_zone))
+    worst = np.full(n_z, -1, dtype=np.int64)
+    if order.size:
+        head = np.ones(order.size, dtype=bool)
+        head[1:] = pt_zone[order[1:]] != pt_zone[order[:-1]]
+        worst[pt_zone[order[head]]] = order[head]
 
-    order = np.lexsort((pos_b, pos_a))
-    (first_move, last_move, pos_a, pos_b, v, f, is_j, cause) = (
-        x[order] for x in (first_move, last_move, pos_a, pos_b, v, f, is_j, cause)
-    )
-    # A rapid or operation change between two events breaks the zone.
-    barrier = np.cumsum(~tp.is_feed) + tp.op_index * (tp.n + 1)
-    gap_limit = f**2 / (2.0 * acc)
-    new = np.ones(v.size, dtype=bool)
-    new[1:] = (
-        pos_a[1:] - np.maximum.accumulate(pos_b)[:-1] > np.minimum(gap_limit[1:], gap_limit[:-1])
-    ) | (barrier[first_move[1:]] != barrier[last_move[:-1]])
-    zid = np.cumsum(new) - 1
-    starts = np.flatnonzero(new)
-    n_z = starts.size
-    # Time lost: braking from F into the zone's first slow point and accelerating back to F
-    # after its last; between slow points the machine never gets back to F; a capped block
-    # is crossed at most at its cap, from and to its neighbours' speeds.
-    last = np.append(starts[1:], v.size) - 1
-    edge = ((f[starts] - v[starts]) ** 2 + (f[last] - v[last]) ** 2) / (2.0 * acc * f[starts])
-    loss = np.zeros(v.size)
-    inner = np.flatnonzero(~new[1:])  # pairs (k, k + 1) inside one zone
-    if inner.size:
-        loss[inner] += _gap_loss(
-            np.maximum(pos_a[inner + 1] - pos_b[inner], 0.0),
-            v[inner],
-            v[inner + 1],
-            np.minimum(f[inner], f[inner + 1]),
-            acc,
-        )
-    el = np.flatnonzero(~is_j)
-    if el.size:
-        same_prev = np.zeros(v.size, dtype=bool)
-        same_prev[1:] = ~new[1:]
-        same_next = np.append(~new[1:], False)
-        v_in = np.where(same_prev[el], v[np.maximum(el - 1, 0)], v[el])
-        v_out = np.where(same_next[el], v[np.minimum(el + 1, v.size - 1)], v[el])
-        d = pos_b[el] - pos_a[el]
-        cap = v[el]
-        with np.errstate(divide="ignore", invalid="ignore"):
-            at_cap = np.nan_to_num(d / cap - d / f[el], posinf=0.0)
-        # _gap_loss compares with running at the cap; add the cap's own loss against F.
-        loss[el] += _gap_loss(d, np.minimum(v_in, cap), np.minimum(v_out, cap), cap, acc) + at_cap
-    z_loss = np.bincount(zid, weights=loss, minlength=n_z) + edge
-    top = np.argsort(-z_loss, kind="stable")[:count]
-    ratio = v / f
+    candidates = np.flatnonzero(points > 0)
+    top = candidates[np.argsort(-lost[candidates], kind="stable")[:count]]
     zones = []
     for rank, z in enumerate(top, start=1):
-        sl = slice(starts[z], starts[z + 1] if z + 1 < n_z else v.size)
-        k = sl.start + int(np.argmin(ratio[sl]))
-        ind, lim = divmod(int(cause[k]), 10_000)
-        a_move, b_move = int(first_move[sl].min()), int(last_move[sl].max())
+        k = int(worst[z])
         if is_j[k]:
-            point = tp.end[first_move[k]]
+            q = int(jsel[k])
+            cause = (
+                f"{ev.indicator_names[ev.junction_indicator[q]]}: {ev.labels[ev.junction_limit[q]]}"
+            )
+            min_feed, prog = float(ev.junction_feed[q]), float(ev.junction_programmed[q])
+            point = tp.end[ev.junction[q]]
         else:
-            point = 0.5 * (tp.start[first_move[k]] + tp.end[first_move[k]])
+            i = int(esel[k - jsel.size])
+            cause = (
+                f"{ev.indicator_names[ev.element_indicator[i]]}: {ev.labels[ev.element_limit[i]]}"
+            )
+            min_feed, prog = float(ev.element_feed[i]), float(tp.feed[i])
+            point = 0.5 * (tp.start[i] + tp.end[i])
+        a, b = int(first[z]), int(last[z])
         zones.append(
             Zone(
                 rank=rank,
-                first=a_move,
-                last=b_move,
-                line_first=int(tp.line[a_move : b_move + 1].min()),
-                line_last=int(tp.line[a_move : b_move + 1].max()),
-                length=float(pos_b[sl].max() - pos_a[sl].min()),
-                discontinuities=int(is_j[sl].sum()),
-                capped_blocks=int((~is_j[sl]).sum()),
-                worst_reduction=float(1.0 - ratio[k]),
-                min_feed=float(v[k]),
-                programmed_feed=float(f[k]),
-                cause=f"{ev.indicator_names[ind]}: {ev.labels[lim]}",
-                time_lost=float(z_loss[z]),
+                first=a,
+                last=b,
+                line_first=int(tp.line[a : b + 1].min()),
+                line_last=int(tp.line[a : b + 1].max()),
+                length=float(length[z]),
+                discontinuities=int(n_j[z]),
+                capped_blocks=int(points[z] - n_j[z]),
+                worst_reduction=float(1.0 - min_feed / prog),
+                min_feed=min_feed,
+                programmed_feed=prog,
+                cause=cause,
+                time_lost=float(lost[z]),
                 point=(float(point[0]), float(point[1]), float(point[2])),
             )
         )
@@ -305,9 +287,13 @@ def length_class(ev: Evaluation) -> NDArray[np.int8]:
     return np.where(tp.is_feed, cls, -1).astype(np.int8)
 
 
-def build_annotations(ev: Evaluation, *, zones: int = 10) -> Annotations:
-    """Classes, markers and zones of an evaluation."""
+def build_annotations(
+    ev: Evaluation, profile: Profile | None = None, *, zones: int = 10
+) -> Annotations:
+    """Classes, markers and zones of an evaluation (its profile is built if not given)."""
     tp = ev.toolpath
+    if profile is None:
+        profile = build_profile(ev)
     mc = np.where(tp.is_feed, reduction_class(np.nan_to_num(ev.element_reduction)), -1)
     counts = []
     for k in range(len(ev.indicator_names)):
@@ -325,7 +311,7 @@ def build_annotations(ev: Evaluation, *, zones: int = 10) -> Annotations:
         junction_cause=ev.junction_indicator,
         junction_limit=ev.junction_limit,
         length_class=length_class(ev),
-        zones=find_zones(ev, zones),
+        zones=find_zones(ev, profile, zones),
         indicator_names=ev.indicator_names,
         indicator_counts=tuple(counts),
         labels=ev.labels,

@@ -15,15 +15,18 @@ from core.errors import UsageError
 from core.indicators import Evaluation, Indicator, combine
 from core.machine import Machine
 from core.plugins import make_plugin_manager
+from core.profile import Profile, build_profile
 from core.toolpath import ExtractOptions, ToolPath
 
 
 @dataclass(frozen=True, eq=False)
 class Analysis:
-    """The result of A1 + A2: the tool path, the combined evaluation and its annotations."""
+    """The result of A1 + A2: the tool path, the combined evaluation, its feed profile and
+    its annotations."""
 
     toolpath: ToolPath
     evaluation: Evaluation
+    profile: Profile
     annotations: Annotations
 
 
@@ -78,7 +81,8 @@ class Ncperf:
     ) -> Analysis:
         tp = self.extract(source, options)
         ev = self.evaluate(tp, machine)
-        return Analysis(tp, ev, build_annotations(ev))
+        profile = build_profile(ev)
+        return Analysis(tp, ev, profile, build_annotations(ev, profile))
 
     def run(
         self,

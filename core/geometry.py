@@ -159,6 +159,37 @@ def arc_curvature(radius: NDArray[np.float64], pitch: NDArray[np.float64]) -> ND
     return radius / (radius**2 + pitch**2)
 
 
+def arc_points(
+    start: NDArray[np.float64],
+    center: NDArray[np.float64],
+    normal: NDArray[np.float64],
+    ccw: NDArray[np.bool_],
+    sweep: NDArray[np.float64],
+    pitch: NDArray[np.float64],
+    frac: NDArray[np.float64],
+) -> NDArray[np.float64]:
+    """Points at fractions ``frac`` (0 = start, 1 = end) of helical arcs, one per row.
+
+    Parameters
+    ----------
+    start, center, normal : (m, 3) float
+    ccw : (m,) bool
+    sweep, pitch, frac : (m,) float
+        Sweep (rad), rise per radian (mm/rad), fraction of the sweep.
+
+    Returns
+    -------
+    (m, 3) float, mm
+    """
+    phi = frac * sweep * np.where(ccw, 1.0, -1.0)
+    r0 = radial(start, center, normal)
+    # Rodrigues' rotation of r0 (perpendicular to n) by phi about n.
+    rot = r0 * np.cos(phi)[:, None] + np.cross(normal, r0) * np.sin(phi)[:, None]
+    rise = (pitch * frac * sweep)[:, None] * normal
+    base = center + dot(start - center, normal)[:, None] * normal
+    return base + rot + rise
+
+
 def sample_arcs(
     start: NDArray[np.float64],
     center: NDArray[np.float64],
@@ -181,11 +212,6 @@ def sample_arcs(
     first = np.cumsum(m) - m
     k = np.arange(owner.size) - first[owner]
     frac = k / counts[owner]
-    phi = frac * sweep[owner] * np.where(ccw[owner], 1.0, -1.0)
-    r0 = radial(start, center, normal)[owner]
-    n = normal[owner]
-    # Rodrigues' rotation of r0 (perpendicular to n) by phi about n.
-    rot = r0 * np.cos(phi)[:, None] + np.cross(n, r0) * np.sin(phi)[:, None]
-    rise = (pitch[owner] * frac * sweep[owner])[:, None] * n
-    base = center[owner] + dot(start[owner] - center[owner], n)[:, None] * n
-    return base + rot + rise
+    return arc_points(
+        start[owner], center[owner], normal[owner], ccw[owner], sweep[owner], pitch[owner], frac
+    )

@@ -14,6 +14,7 @@ import numpy as np
 
 from core.facade import Analysis
 from core.indicators import REDUCTION_LABELS, reduction_class
+from core.profile import Profile
 from core.toolpath import KIND_LABELS
 
 PER_MIN = 60.0
@@ -59,9 +60,25 @@ def totals(an: Analysis) -> dict[str, float | int]:
         "rapid_time_s": rapid_time(an),
         "dwell_time_s": float(tp.dwell.sum()),
         "paper_model_time_s": ev.paper_time,
+        "predicted_cycle_time_s": an.profile.cycle_time,
+        "share_at_90_percent": at_feed_share(an.profile, 0.9),
         "below_L_share": float(tp.length[below].sum() / tp.feed_length) if tp.feed_length else 0.0,
         "blocks_below_L": int(below.sum()),
     }
+
+
+def at_feed_share(profile: Profile, fraction: float = 0.9) -> float:
+    """Share of the feed length run at ``fraction`` of the programmed feed or more."""
+    tp = profile.toolpath
+    f = tp.is_feed
+    if not f.any():
+        return 0.0
+    thr = fraction * tp.feed[f]
+    v0, v1, vp = profile.v_entry[f], profile.v_exit[f], profile.v_peak[f]
+    up = np.maximum((thr**2 - v0**2) / (2 * profile.a_up[f]), 0.0)
+    down = np.maximum((thr**2 - v1**2) / (2 * profile.a_down[f]), 0.0)
+    fast = np.where(vp >= thr * (1 - 1e-12), np.maximum(tp.length[f] - up - down, 0.0), 0.0)
+    return float(fast.sum() / tp.length[f].sum())
 
 
 def class_table(an: Analysis) -> list[tuple[str, list[int]]]:
@@ -99,6 +116,14 @@ def summary(an: Analysis, *, machine_note: str = "") -> str:
         f"  paper-model time {fmt_time(t['paper_model_time_s'])} (+{extra:.1f} %: short blocks "
         "capped by model 3; discontinuities are points and cost no time)"
     )
+    base = prog + t["rapid_time_s"] + t["dwell_time_s"]
+    extra = (t["predicted_cycle_time_s"] / base - 1) * 100 if base else 0.0
+    lines.append(
+        f"  predicted cycle  {fmt_time(t['predicted_cycle_time_s'])} (+{extra:.1f} % on programmed"
+        f" + rapids + dwell: braking and accelerating around every slow point, look-ahead over"
+        f" the whole path; {t['share_at_90_percent'] * 100:.1f} % of the feed length at 90 % of F"
+        " or more)"
+    )
     lines.append(
         f"  below L          {t['below_L_share'] * 100:.1f} % of the feed length is in "
         f"{t['blocks_below_L']:,} blocks shorter than L = F t_int "
@@ -117,14 +142,16 @@ def summary(an: Analysis, *, machine_note: str = "") -> str:
             nk = int(np.count_nonzero(ev.element_indicator == k))
             if nk:
                 lines.append(f"  blocks capped    {nk:,} by {name}")
-    lines.append("  worst zones (slow points closer than the distance to regain F; ranked by the")
-    lines.append("  time they cost, each braked and left at the lowest axis acceleration):")
+    lines.append(
+        "  worst zones (runs of blocks the profile keeps below 90 % of F around slow points,"
+    )
+    lines.append("  ranked by the time they lose against length / F):")
     if not ann.zones:
         lines.append("    none: no block or junction is predicted 10 % or more below F")
     else:
         lines.append(
-            f"    {'#':>2s}  {'lines':13s} {'extent':>9s} {'slow pts':>8s} {'worst':>6s} "
-            f"{'min feed':>22s} {'cost':>9s}  cause"
+            f"    {'#':>2s}  {'lines':13s} {'length':>9s} {'slow pts':>8s} {'worst':>6s} "
+            f"{'min feed':>22s} {'lost':>9s}  cause"
         )
         for z in ann.zones:
             feed = f"{z.min_feed * PER_MIN:,.0f} of F{z.programmed_feed * PER_MIN:,.0f}"
@@ -166,6 +193,8 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
         "feed_length_mm": round(t["feed_length_mm"], 4),
         "programmed_time_s": round(t["programmed_time_s"], 4),
         "paper_model_time_s": round(t["paper_model_time_s"], 4),
+        "predicted_cycle_time_s": round(t["predicted_cycle_time_s"], 4),
+        "share_at_90_percent": round(t["share_at_90_percent"], 6),
         "rapid_time_s": round(t["rapid_time_s"], 4),
         "dwell_time_s": round(t["dwell_time_s"], 4),
         "below_L_share": round(t["below_L_share"], 6),
@@ -176,7 +205,7 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
                 "rank": z.rank,
                 "line_start": z.line_first,
                 "line_end": z.line_last,
-                "extent_mm": round(z.length, 4),
+                "length_mm": round(z.length, 4),
                 "discontinuities": z.discontinuities,
                 "capped_blocks": z.capped_blocks,
                 "worst_reduction": round(z.worst_reduction, 6),
@@ -225,6 +254,7 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
     el_cause = np.where(
         ev.element_indicator >= 0, names[ev.element_indicator] + ": " + labels[el_lim], None
     )
+    pr = an.profile
     ecols = [
         tp.line.tolist(),
         kinds[tp.kind].tolist(),
@@ -233,6 +263,10 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
         _num(ev.element_feed * PER_MIN, 3),
         _num(ev.min_length, 5),
         el_cause.tolist(),
+        _num(pr.v_entry * PER_MIN, 3),
+        _num(pr.v_peak * PER_MIN, 3),
+        _num(pr.v_exit * PER_MIN, 3),
+        _num(pr.time, 6),
     ]
     fh.write(' "elements": [')
     _write_rows(
@@ -246,6 +280,10 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
                 "predicted_feed",
                 "min_length_mm",
                 "limited_by",
+                "entry_feed",
+                "peak_feed",
+                "exit_feed",
+                "time_s",
             ),
             ecols,
         ),

@@ -289,6 +289,30 @@ class ToolPath:
         """(n, 3) curvature vector at each move's end, 1/mm."""
         return self._curvature_vector("r1")
 
+    @cached_property
+    def axis_share(self) -> NDArray[np.float64]:
+        """(n, 3) largest share |t_k| of each axis in the unit tangent over each move.
+
+        Lines have one direction. On arcs the in-plane part of the tangent turns with the
+        sweep (its largest share per axis: :func:`core.geometry.max_share`); a helix adds
+        its constant rise along the normal, bounded by adding its share (|a + b| <= |a| + |b|).
+        An axis moving at path speed V runs at V times its share: what per-axis feed,
+        acceleration and jerk limits are divided by.
+        """
+        share = np.abs(self.tangent_start)
+        a = self._arc
+        if a["idx"].size:
+            idx = a["idx"]
+            n = self.normal[idx]
+            c = a["pitch"]
+            r = a["radius"]
+            h = np.hypot(r, c)
+            t0 = g.unit(np.where(a["ccw"][:, None], 1.0, -1.0) * np.cross(n, a["r0"]))
+            turned = np.where(a["ccw"][:, None], np.cross(n, t0), -np.cross(n, t0))  # +90 deg
+            inplane = g.max_share(t0, turned, self.sweep[idx][:, None]) * (r / h)[:, None]
+            share[idx] = np.minimum(inplane + np.abs(n * (c / h)[:, None]), 1.0)
+        return share
+
     # ------------------------------------------------------------------ junctions
     @cached_property
     def junctions(self) -> NDArray[np.int64]:

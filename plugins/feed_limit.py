@@ -12,28 +12,9 @@ from __future__ import annotations
 import numpy as np
 
 from core import Indicator, Machine, ToolPath, hookimpl
-from core import geometry as g
 
 NAME = "feed_limit"
 LABELS = ("feed X", "feed Y", "feed Z")
-
-
-def axis_shares(tp: ToolPath) -> np.ndarray:
-    """(n, 3) largest share of each axis in the tangent over each move."""
-    share = np.abs(tp.tangent_start)
-    a = np.flatnonzero(tp.is_arc)
-    if a.size:
-        n = tp.normal[a]
-        c = tp.pitch[a]
-        r = tp.radius[a]
-        h = np.hypot(r, c)
-        t0 = tp.tangent_start[a]
-        planar = g.unit(t0 - g.dot(t0, n)[:, None] * n)  # in-plane tangent at the start
-        ccw = (tp.kind[a] == 3)[:, None]
-        turned = np.where(ccw, np.cross(n, planar), -np.cross(n, planar))  # at +90 deg
-        inplane = g.max_share(planar, turned, tp.sweep[a][:, None]) * (r / h)[:, None]
-        share[a] = np.minimum(inplane + np.abs(n * (c / h)[:, None]), 1.0)
-    return share
 
 
 @hookimpl
@@ -41,7 +22,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     """Cap feed blocks programmed above min_k Vmax_k / (share of axis k)."""
     tp = toolpath
     i = np.flatnonzero(tp.is_feed)
-    share = axis_shares(tp)[i]
+    share = tp.axis_share[i]
     with np.errstate(divide="ignore"):
         per_axis = np.where(share > 0, machine.max_feed / share, np.inf)
     axis = np.argmin(per_axis, axis=1)

@@ -16,6 +16,7 @@ import pytest
 import core
 from core import Ncperf, UsageError, hookspecs, make_plugin_manager
 from core.annotations import build_annotations
+from core.profile import build_profile
 from core.report import write_json
 from tests.conftest import ROOT, machine, path
 from tests.plugins import sample
@@ -87,7 +88,7 @@ def test_third_party_plugin_all_hooks(tmp_path):
     from core.facade import Analysis
 
     with open(out, "w") as fh:
-        write_json(Analysis(arc, ev, ann), fh)
+        write_json(Analysis(arc, ev, build_profile(ev), ann), fh)
     data = json.loads(out.read_text())
     assert data["elements"][0]["limited_by"] == "arc_speed: centripetal acceleration"
     svg = nc.display(arc, ann, str(tmp_path / "r.svg"))

@@ -9,6 +9,7 @@ import pytest
 
 from core import ToolPath
 from core.annotations import build_annotations, find_zones
+from core.profile import build_profile
 from core.toolpath import MoveKind, drop_zero_length, empty_columns, polyline
 from tests.conftest import machine, path
 
@@ -88,33 +89,34 @@ def test_drop_zero_length_keeps_stops_and_operations():
 
 
 def test_zones_merge_close_corners_and_rank_by_time_lost(models):
-    """Two 90 deg corners 0.5 mm apart are one zone (regain distance F^2/2A = 2 mm); a third
-    corner 20 mm away is another. Times lost worked out by hand."""
-    # F = 100 mm/s, A = 2500 mm/s^2: F^2 / (2 A) = 2 mm. Three 90 deg corners: (10,0) left
-    # turn, (10,0.5) right turn, (30,0.5) left turn. Jerk large, so each corner runs at
-    # sqrt(A R), R = 0.0241421: v = 7.768870 mm/s. (The 0.5 mm block is shorter than
-    # L = 1.2 mm, capped at 41.67 mm/s, more than the 36.2 mm/s acceleration allows there.)
+    """Corners the machine cannot regain F between form one zone; a lone corner another. The
+    time lost is worked out by hand for a trapezoidal profile (no jerk limit)."""
+    # F = 100 mm/s, A = 2500 mm/s^2 (axis-aligned moves), t_int 1 ms (no block capped).
+    # Three 90 deg corners: (10,0), (10,0.5), (30,0.5); each at sqrt(A R) with
+    # R = 0.0241421 mm: v = 7.768870 mm/s. Between the first two (0.5 mm) the speed
+    # peaks at sqrt(v^2 + A 0.5) = 36.199 mm/s < 0.9 F: one zone. The 10, 20 and 20 mm
+    # moves reach F and separate zones.
+    inf = float("inf")
     tp = path(
         [{"end": (10, 0, 0)}, {"end": (10, 0.5, 0)}, {"end": (30, 0.5, 0)}, {"end": (30, 20.5, 0)}],
         feed=100.0,
     )
-    ev = models.evaluate(tp, machine(jerk=(1e6, 1e6, 1e6)))
+    ev = models.evaluate(tp, machine(jerk=(inf, inf, inf), t_int=0.001))
+    pr = build_profile(ev)
     v = math.sqrt(2500 * 0.0241421356237)
     F, A = 100.0, 2500.0
-    zones = find_zones(ev)
+    zones = find_zones(ev, pr)
     assert len(zones) == 2
     pair, single = zones  # the pair costs more
-    assert (pair.line_first, pair.line_last) == (1, 3)
-    assert pair.discontinuities == 2 and pair.capped_blocks == 1
-    assert pair.length == pytest.approx(0.5)
-    # single corner: brake F -> v and back: (F - v)^2 / (A F)
-    assert single.time_lost == pytest.approx((F - v) ** 2 / (A * F), rel=1e-9)
-    # pair: brake into the first, leave the second, and the 0.5 mm between at most at
-    # peak sqrt(A d + v^2) = sqrt(1250 + 60.355) = 36.199 mm/s (below F):
-    # ramps 2 (peak - v) / A, no cruise; minus 0.5 / F.
+    assert (pair.first, pair.last) == (0, 2) and (pair.line_first, pair.line_last) == (1, 3)
+    assert pair.discontinuities == 2 and pair.capped_blocks == 0
+    # braking F -> v and accelerating v -> F each lose (F - v)^2 / (2 A F)
+    ramp = (F - v) ** 2 / (2 * A * F)
+    assert single.time_lost == pytest.approx(2 * ramp, rel=1e-9)
+    assert single.length == pytest.approx(2 * (F**2 - v**2) / (2 * A), rel=1e-9)
+    # the 0.5 mm move: up and down to 36.199 mm/s, 2 (peak - v) / A, against 0.5 / F
     peak = math.sqrt(A * 0.5 + v * v)
-    gap = 2 * (peak - v) / A - 0.5 / F
-    assert pair.time_lost == pytest.approx((F - v) ** 2 / (A * F) + gap, rel=1e-9)
+    assert pair.time_lost == pytest.approx(2 * ramp + 2 * (peak - v) / A - 0.5 / F, rel=1e-9)
     assert pair.worst_reduction == pytest.approx(1 - v / F)
     assert pair.cause.startswith("tangential: acceleration")
 
@@ -134,14 +136,17 @@ def test_annotations_classes():
 
 def test_zone_of_capped_blocks(models):
     """20 collinear 1 mm blocks at 10 m/min, t_int 12 ms: one zone, all capped at 5 m/min."""
-    # F = 166.667 mm/s, cap = 83.333 mm/s, A = 2500 mm/s^2.
-    # Entry and exit: 2 (F - cap)^2 / (2 A F) = 83.333^2 / (2500 * 166.667) = 0.0166667 s;
-    # each block: 1/83.333 - 1/166.667 = 0.006 s, 20 of them 0.12 s. Total 0.1366667 s.
+    # F = 166.667 mm/s, cap 1 / 0.012 = 83.333 mm/s < 0.9 F: no move reaches 90 % of F, so
+    # the zone is the whole path, from rest to rest (trapezoid, A = 2500 mm/s^2):
+    # ramps 83.333 / 2500 = 0.033333 s over 83.333^2 / 5000 = 1.388889 mm each, cruise
+    # (20 - 2.777778) / 83.333 = 0.206667 s: 0.273333 s, against 20 / 166.667 = 0.12 s.
+    inf = float("inf")
     tp = polyline([[i, 0, 0] for i in range(21)], 10000 / 60)
-    zones = find_zones(models.evaluate(tp, machine()))
+    ev = models.evaluate(tp, machine(jerk=(inf, inf, inf)))
+    zones = find_zones(ev, build_profile(ev))
     assert len(zones) == 1
     z = zones[0]
     assert (z.capped_blocks, z.discontinuities) == (20, 0)
     assert z.length == pytest.approx(20.0)
-    assert z.time_lost == pytest.approx(0.1366667, rel=1e-6)
+    assert z.time_lost == pytest.approx(0.2733333 - 0.12, rel=1e-6)
     assert z.cause == "ncu_capacity: block time"
