@@ -1,0 +1,156 @@
+"""The feed profile and cycle time (issue 4), against closed forms worked out by hand."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import numpy as np
+import pytest
+
+from core.profile import build_profile, effective_acceleration
+from tests.conftest import machine, path
+
+INF = float("inf")
+
+
+def profile(models, moves, feed=100.0, **mach):
+    tp = path(moves, feed=feed)
+    return build_profile(models.evaluate(tp, machine(**mach)))
+
+
+def test_long_line_trapezoid(models):
+    """100 mm at 100 mm/s, A 2500 mm/s^2, no jerk limit: T = L/F + F/A = 1.04 s."""
+    pr = profile(models, [{"end": (100, 0, 0)}], jerk=(INF, INF, INF))
+    assert pr.cycle_time == pytest.approx(1.04, rel=1e-12)
+    assert pr.v_peak[0] == pytest.approx(100.0)
+
+
+def test_long_line_s_curve_reaching_the_acceleration(models):
+    """1000 mm at 400 mm/s, A 2500, J 50000 mm/s^3: A^2/J = 125 < 400, so each ramp takes
+    dv/A + A/J = 0.16 + 0.05 = 0.21 s over 200 * 0.21 = 42 mm: T = 2.5 + 0.21 = 2.71 s."""
+    pr = profile(models, [{"end": (1000, 0, 0)}], feed=400.0, jerk=(50.0, 50.0, 50.0))
+    assert pr.cycle_time == pytest.approx(2.71, rel=1e-9)
+
+
+def test_long_line_s_curve_never_reaching_the_acceleration(models):
+    """100 mm at 100 mm/s, A 2500, J 5000 (the 840D preset): A^2/J = 1250 > 100, so each
+    ramp takes 2 sqrt(dv/J) = 0.282843 s: T = 1 + 0.282843 = 1.282843 s."""
+    pr = profile(models, [{"end": (100, 0, 0)}])
+    assert pr.cycle_time == pytest.approx(1 + 2 * math.sqrt(100 / 5000), rel=1e-9)
+
+
+def test_effective_acceleration_closed_forms():
+    """A_eff = dv / T: 400 / 0.21 = 1904.76 (A reached); 100 / 0.282843 = 353.553 (not)."""
+    got = effective_acceleration([400.0, 100.0, 0.0], [2500.0] * 3, [50000.0, 5000.0, 5000.0])
+    assert got == pytest.approx([400 / 0.21, 100 / (2 * math.sqrt(100 / 5000)), 2500.0])
+    assert effective_acceleration([100.0], [2500.0], [INF])[0] == 2500.0
+
+
+def test_short_line_never_reaches_the_feed(models):
+    """1 mm at F1000: peak sqrt(A L) = 50 mm/s, T = 2 * 50 / 2500 = 0.04 s."""
+    pr = profile(models, [{"end": (1, 0, 0)}], feed=1000.0, jerk=(INF, INF, INF))
+    assert pr.v_peak[0] == pytest.approx(50.0)
+    assert pr.cycle_time == pytest.approx(0.04)
+
+
+def test_short_jerk_limited_line(models):
+    """1 mm between stops with J 5000: peak (L/2)^(2/3) J^(1/3) = 10.7722 mm/s."""
+    pr = profile(models, [{"end": (1, 0, 0)}], feed=1000.0)
+    assert pr.v_peak[0] == pytest.approx(0.5 ** (2 / 3) * 5000 ** (1 / 3), rel=1e-4)
+
+
+def test_corner_braking_distance(models):
+    """Two 10 mm lines with a 90 deg corner at v = 7.768870 mm/s (sqrt(A R)): the machine
+    brakes over (F^2 - v^2) / (2 A) = 1.987929 mm before it."""
+    pr = profile(models, [{"end": (10, 0, 0)}, {"end": (10, 10, 0)}], jerk=(INF, INF, INF))
+    v = math.sqrt(2500 * 0.0241421356237)
+    brake = (100**2 - v**2) / 5000
+    assert pr.v_exit[0] == pytest.approx(v)
+    assert pr.speed_at(10 - brake - 1e-9) == pytest.approx(100.0)
+    assert pr.speed_at(10 - brake / 2) == pytest.approx(math.sqrt(v**2 + 2500 * brake))
+    # each move: 0.04 s ramp from rest, (100 - v) / 2500 braking, the rest at F
+    cruise = 10 - 2 - brake
+    t_move = 0.04 + (100 - v) / 2500 + cruise / 100
+    assert pr.cycle_time == pytest.approx(2 * t_move, rel=1e-12)
+
+
+def test_very_short_blocks_never_reach_feed(models):
+    """50 collinear 0.5 mm blocks at F300: a 25 mm triangle from rest to rest, peak
+    sqrt(A L) = 250 mm/s < F, T = 2 sqrt(L / A) = 0.2 s."""
+    moves = [{"end": (0.5 * (i + 1), 0, 0)} for i in range(50)]
+    pr = profile(models, moves, feed=300.0, jerk=(INF, INF, INF), t_int=0.001)
+    assert pr.v_peak.max() == pytest.approx(250.0)
+    assert pr.cycle_time == pytest.approx(0.2)
+    assert (pr.v_peak < 300.0).all()
+
+
+def test_exact_stop_and_dwell(models):
+    """Two collinear 10 mm lines: continuous 20/100 + 0.04 = 0.24 s; with G61 on the first,
+    each runs from rest to rest: 2 * (0.1 + 0.04) = 0.28 s; a 0.5 s dwell adds 0.5 s."""
+    moves = [{"end": (10, 0, 0)}, {"end": (20, 0, 0)}]
+    tp = path(moves)
+    m = machine(jerk=(INF, INF, INF))
+    assert build_profile(models.evaluate(tp, m)).cycle_time == pytest.approx(0.24)
+    g61 = dataclasses.replace(tp, path_mode=np.array([1, 0]))
+    assert build_profile(models.evaluate(g61, m)).cycle_time == pytest.approx(0.28)
+    dwell = dataclasses.replace(tp, dwell=np.array([0.5, 0.0]))
+    pr = build_profile(models.evaluate(dwell, m))
+    assert pr.cycle_time == pytest.approx(0.78)
+    assert pr.v_exit[0] == 0.0
+
+
+def test_rapids_run_at_the_axes_max_feed(models):
+    """G0 100 mm along X with Vmax 500 mm/s: a triangle to sqrt(A L) = 500 mm/s, 0.4 s."""
+    pr = profile(models, [{"end": (100, 0, 0), "rapid": True}], jerk=(INF, INF, INF))
+    assert pr.cap[0] == pytest.approx(500.0)
+    assert pr.cycle_time == pytest.approx(0.4)
+
+
+def test_diagonal_uses_the_per_axis_share(models):
+    """A 45 deg line: each axis carries cos 45 of the tangent, so A_t = 2500 / 0.7071 =
+    3535.53 mm/s^2 and 100 mm at F100 takes 1 + 100 / 3535.53 = 1.028284 s."""
+    c = math.sqrt(0.5)
+    pr = profile(models, [{"end": (100 * c, 100 * c, 0)}], jerk=(INF, INF, INF))
+    assert pr.cycle_time == pytest.approx(1 + 100 / (2500 / c), rel=1e-12)
+
+
+def test_samples_follow_the_profile(models):
+    """Sampled every 1 ms: starts at rest, ends at rest at the cycle time, x moves forward,
+    the speed never exceeds F and agrees with the position's derivative."""
+    pr = profile(models, [{"end": (100, 0, 0)}], jerk=(INF, INF, INF))
+    s = pr.sample(0.001)
+    assert s.t[0] == 0.0 and s.t[-1] == pytest.approx(1.04)
+    assert s.v[0] == 0.0 and s.v[-1] == pytest.approx(0.0, abs=1e-9)
+    assert np.all(np.diff(s.x) >= 0) and s.x[-1] == pytest.approx(100.0)
+    assert s.v.max() == pytest.approx(100.0)
+    mid = np.gradient(s.x, s.t)[100:-100]
+    assert np.allclose(mid, s.v[100:-100], atol=1.5)
+    assert set(s.line.tolist()) == {1}
+
+
+def test_arc_samples_stay_on_the_circle(models):
+    """Samples on a quarter arc of R 5 lie on the circle."""
+    pr = profile(models, [{"end": (5, 5, 0), "center": (0, 5, 0), "ccw": True}],
+                 jerk=(INF, INF, INF))
+    s = pr.sample(0.001)
+    r = np.hypot(s.x - 0.0, s.y - 5.0)
+    assert np.allclose(r, 5.0)
+
+
+def test_cycle_time_of_a_g_code_program(nc):
+    """Through the adapter: G61 and G4 in a program add their stop and dwell."""
+    from adapters.gcode import read_gcode
+    from core import load_preset
+
+    base = "G21 G64 G1 X10 F6000\nX20\n"
+    m = load_preset("linuxcnc-sim")  # A 2000 mm/s^2, no jerk limit
+    t0 = build_profile(nc.evaluate(read_gcode(base.encode(), "a.nc"), m)).cycle_time
+    t1 = build_profile(nc.evaluate(read_gcode(b"G21 G61 G1 X10 F6000\nG64 X20\n", "b.nc"),
+                                   m)).cycle_time
+    t2 = build_profile(nc.evaluate(read_gcode(b"G21 G64 G1 X10 F6000\nG4 P0.25\nX20\n",
+                                              "c.ngc"), m)).cycle_time
+    # continuous: 20 mm at 100 mm/s plus one ramp 100 / 2000 = 0.05 s; stops: 2 * (0.1 + 0.05)
+    assert t0 == pytest.approx(0.25)
+    assert t1 == pytest.approx(0.30)
+    assert t2 == pytest.approx(0.55)
