@@ -5,7 +5,13 @@ Importing ``core`` builds no plugin manager and imports no adapter or plugin.
 
 from __future__ import annotations
 
-from core.annotations import Annotations, FileTarget, Zone, build_annotations
+from core.annotations import (
+    Annotations,
+    ComparisonTarget,
+    FileTarget,
+    Zone,
+    build_annotations,
+)
 from core.errors import InputError, MachineError, NcperfError, Notice, UsageError
 from core.facade import Analysis, Ncperf
 from core.hookspecs import hookimpl
@@ -22,6 +28,7 @@ __all__ = [
     "TOL",
     "Analysis",
     "Annotations",
+    "ComparisonTarget",
     "Evaluation",
     "ExtractOptions",
     "FileTarget",

@@ -55,6 +55,29 @@ class FileTarget:
             raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
 
 
+@dataclass(frozen=True, eq=False)
+class ComparisonTarget:
+    """A file to draw several programs into, side by side (``ncperf compare``).
+
+    Attributes
+    ----------
+    path : str
+        Output file; its extension picks the display.
+    panels : tuple of (label, ToolPath, Annotations)
+        The programs, in drawing order.
+    view : {"xy", "xz", "yz", "iso"}
+    """
+
+    path: str
+    panels: tuple
+    view: str = "xy"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "path", os.fspath(self.path))
+        if self.view not in VIEWS:
+            raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
+
+
 @dataclass(frozen=True)
 class Zone:
     """A stretch of the path the predicted profile keeps below 90 % of the programmed feed
@@ -173,6 +196,11 @@ class Annotations:
     rapid_colour: str = RAPID_COLOUR
 
 
+def zone_count(ev: Evaluation, profile: Profile) -> int:
+    """How many zones (see :func:`find_zones`) the program has."""
+    return _zones(ev, profile, None)
+
+
 def find_zones(ev: Evaluation, profile: Profile, count: int = 10) -> tuple[Zone, ...]:
     """The ``count`` zones that cost the most time.
 
@@ -185,9 +213,13 @@ def find_zones(ev: Evaluation, profile: Profile, count: int = 10) -> tuple[Zone,
     is in the cycle time all the same. Zones are ranked by the time the profile loses on
     them against length / F.
     """
+    return _zones(ev, profile, count)
+
+
+def _zones(ev: Evaluation, profile: Profile, count: int | None):
     tp = ev.toolpath
     if tp.n == 0:
-        return ()
+        return () if count is not None else 0
     feed = tp.is_feed
     t_up, t_dn, d_up, d_dn, _ = profile._phases
     with np.errstate(invalid="ignore", divide="ignore"):
@@ -237,6 +269,8 @@ def find_zones(ev: Evaluation, profile: Profile, count: int = 10) -> tuple[Zone,
         worst[pt_zone[order[head]]] = order[head]
 
     candidates = np.flatnonzero(points > 0)
+    if count is None:
+        return len(candidates)
     top = candidates[np.argsort(-lost[candidates], kind="stable")[:count]]
     zones = []
     for rank, z in enumerate(top, start=1):

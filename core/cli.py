@@ -13,12 +13,15 @@ from importlib import resources
 from pathlib import Path
 
 from core import __version__
-from core.annotations import VIEWS, FileTarget
+from core.annotations import VIEWS, ComparisonTarget, FileTarget
+from core.compare import ranked
+from core.compare import row as compare_row
+from core.compare import table as compare_table
 from core.errors import NcperfError, UsageError
 from core.facade import Ncperf
 from core.machine import DEFAULT_PRESET, load_preset, preset_names, resolve_machine
 from core.output import atomic_writer
-from core.report import summary, write_json
+from core.report import fmt_time, summary, write_json, write_samples
 from core.toolpath import ExtractOptions
 
 DEMO_PROGRAM = "zlevel_cavity.ngc"
@@ -45,24 +48,29 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     a.set_defaults(run=cmd_analyze)
     a.add_argument("program", nargs="?", help="tool path file (G-code); none: the bundled demo")
     a.add_argument("--demo", action="store_true", help="run on the bundled Z-level demo program")
-    a.add_argument(
-        "--machine",
-        metavar="PRESET|FILE",
-        help=f"machine preset name or TOML file (default: {DEFAULT_PRESET})",
-    )
+    _common(a)
     a.add_argument("--svg", metavar="OUT", help="write the coloured tool path as SVG")
     a.add_argument("--json", metavar="OUT", help="write junctions and elements as JSON")
     a.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
-    a.add_argument(
-        "--dialect",
-        choices=("fanuc", "siemens", "linuxcnc"),
-        help="G-code dialect (default: from the file)",
+
+    pr = sub.add_parser("profile", help="the predicted feed profile as a trace (CSV)")
+    pr.set_defaults(run=cmd_profile)
+    pr.add_argument("program", help="tool path file (G-code)")
+    _common(pr)
+    pr.add_argument(
+        "--csv",
+        metavar="OUT",
+        required=True,
+        help="write t,x,y,z,v,line (s, mm, mm/s, 1-based line) every --dt",
     )
-    a.add_argument(
-        "--block-delete",
-        action="store_true",
-        help="skip blocks starting with '/' (block-delete switch on)",
-    )
+    pr.add_argument("--dt", type=float, default=0.001, help="time step in s (default 0.001)")
+
+    c = sub.add_parser("compare", help="rank machining strategies by predicted cycle time")
+    c.set_defaults(run=cmd_compare)
+    c.add_argument("programs", nargs="+", metavar="PROGRAM", help="two or more tool path files")
+    _common(c)
+    c.add_argument("--svg", metavar="OUT", help="the programs side by side, one colour scale")
+    c.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
 
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
     m.set_defaults(run=cmd_machines)
@@ -70,6 +78,34 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     pl.set_defaults(run=cmd_plugins)
     nc.add_commands(sub)
     return p
+
+
+def _common(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--machine",
+        metavar="PRESET|FILE",
+        help=f"machine preset name or TOML file (default: {DEFAULT_PRESET})",
+    )
+    p.add_argument(
+        "--dialect",
+        choices=("fanuc", "siemens", "linuxcnc"),
+        help="G-code dialect (default: from the file)",
+    )
+    p.add_argument(
+        "--block-delete",
+        action="store_true",
+        help="skip blocks starting with '/' (block-delete switch on)",
+    )
+
+
+def _machine(args: argparse.Namespace) -> tuple:
+    machine = resolve_machine(args.machine)
+    note = "" if args.machine else f" [preset {DEFAULT_PRESET}, the default; --machine to choose]"
+    return machine, note
+
+
+def _options(args: argparse.Namespace) -> ExtractOptions:
+    return ExtractOptions(dialect=args.dialect, block_delete=args.block_delete)
 
 
 def _check_output(path: str | None) -> None:
@@ -95,11 +131,8 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
     svg = args.svg if args.svg or not demo else DEMO_SVG
     for out in (svg, args.json):
         _check_output(out)
-    machine = resolve_machine(args.machine)
-    note = "" if args.machine else f" [preset {DEFAULT_PRESET}, the default; --machine to choose]"
-    analysis = nc.analyze(
-        program, machine, ExtractOptions(dialect=args.dialect, block_delete=args.block_delete)
-    )
+    machine, note = _machine(args)
+    analysis = nc.analyze(program, machine, _options(args))
     _print_notices(analysis.toolpath.notices, sys.stderr)
     print(summary(analysis, machine_note=note))
     if svg:
@@ -110,6 +143,57 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
         with atomic_writer(args.json) as fh:
             write_json(analysis, fh)
         print(f"  json             {args.json}")
+    return 0
+
+
+def cmd_profile(args: argparse.Namespace, nc: Ncperf) -> int:
+    if not args.dt > 0:
+        raise UsageError(f"--dt must be positive, got {args.dt}")
+    _check_output(args.csv)
+    machine, note = _machine(args)
+    analysis = nc.analyze(args.program, machine, _options(args))
+    _print_notices(analysis.toolpath.notices, sys.stderr)
+    pr = analysis.profile
+    samples = pr.sample(args.dt)
+    with atomic_writer(args.csv) as fh:
+        write_samples(samples, fh)
+    tp = analysis.toolpath
+    print(f"ncperf profile: {tp.source} on {machine.name}{note}")
+    print(
+        f"  predicted cycle  {fmt_time(pr.cycle_time)} (programmed feed time "
+        f"{fmt_time(tp.programmed_time)})"
+    )
+    print(f"  csv              {args.csv} ({samples.t.size:,} samples every {args.dt:g} s)")
+    return 0
+
+
+def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
+    if len(args.programs) < 2:
+        raise UsageError("compare needs two or more programs")
+    _check_output(args.svg)
+    machine, note = _machine(args)
+    rows, panels = [], []
+    for program in args.programs:
+        an = nc.analyze(program, machine, _options(args))
+        _print_notices(an.toolpath.notices, sys.stderr)
+        label = Path(program).name
+        r = compare_row(label, an)
+        rows.append(r)
+        panels.append((r, an))
+    print(compare_table(rows, machine.name + note))
+    if args.svg:
+        order = {id(r): k for k, r in enumerate(ranked(rows), start=1)}
+        items = tuple(
+            (
+                f"#{order[id(r)]} {r.label}: predicted {fmt_time(r.cycle_time)}",
+                an.toolpath,
+                an.annotations,
+            )
+            for r, an in panels
+        )
+        target = ComparisonTarget(args.svg, items, view=args.view)
+        written = nc.display(items[0][1], items[0][2], target)
+        print(f"  svg              {written}")
     return 0
 
 

@@ -14,7 +14,7 @@ import numpy as np
 
 from core.facade import Analysis
 from core.indicators import REDUCTION_LABELS, reduction_class
-from core.profile import Profile
+from core.profile import Profile, Samples
 from core.toolpath import KIND_LABELS
 
 PER_MIN = 60.0
@@ -296,3 +296,13 @@ def _write_rows(fh: IO[str], rows: Iterator[str]) -> None:
     for r in rows:
         fh.write(("\n  " if first else ",\n  ") + r)
         first = False
+
+
+def write_samples(samples: Samples, fh: IO[str]) -> None:
+    """A sampled profile as CSV: t,x,y,z,v,line (s, mm, mm/s, 1-based line), the columns
+    of a measured trace."""
+    fh.write("t,x,y,z,v,line\n")
+    cols = np.column_stack(
+        [samples.t, samples.x, samples.y, samples.z, samples.v, samples.line.astype(np.float64)]
+    )
+    np.savetxt(fh, cols, fmt=("%.6f", "%.6f", "%.6f", "%.6f", "%.6f", "%d"), delimiter=",")

@@ -7,6 +7,7 @@ import subprocess
 import sys
 import xml.etree.ElementTree as ET
 
+import numpy as np
 import pytest
 
 from core.cli import main
@@ -161,3 +162,50 @@ def test_views(program, tmp_path):
         out = tmp_path / f"{view}.svg"
         assert main(["analyze", str(program), "--svg", str(out), "--view", view]) == 0
         assert view in out.read_text().lower()
+
+
+def test_profile_command_writes_a_trace(tmp_path, capsys):
+    """`ncperf profile --csv` writes t,x,y,z,v,line every dt, from rest to rest, up to the
+    predicted cycle time: one 100 mm line at F6000 on LinuxCNC's machine (A 2000 mm/s^2, no
+    jerk limit) takes 100/100 + 100/2000 = 1.05 s."""
+    p = tmp_path / "line.ngc"
+    p.write_text("G21 G90 G64 P0.01\nG1 X100 F6000\nM2\n")
+    out = tmp_path / "p.csv"
+    assert (
+        main(["profile", str(p), "--machine", "linuxcnc-sim", "--csv", str(out), "--dt", "0.01"])
+        == 0
+    )
+    assert "predicted cycle  1.05 s" in capsys.readouterr().out
+    rows = out.read_text().splitlines()
+    assert rows[0] == "t,x,y,z,v,line"
+    data = np.loadtxt(out, delimiter=",", skiprows=1)
+    assert data.shape == (106, 6)  # 0, 0.01, ..., 1.05
+    assert data[-1, 0] == pytest.approx(1.05)
+    assert data[0, 4] == 0.0 and data[-1, 4] == pytest.approx(0.0, abs=1e-6)
+    assert data[:, 4].max() == pytest.approx(100.0)
+    assert data[-1, 1] == pytest.approx(100.0)
+    assert set(data[:, 5].astype(int)) == {2}
+
+
+def test_compare_ranks_the_slower_strategy_last(tmp_path, capsys):
+    """The same 60 mm line as 1 mm points (capped at 1/0.012 mm/s by model 3) and as 3 mm
+    points (not capped): the 1 mm version is predicted slower and ranked second."""
+    fine, coarse = tmp_path / "fine.nc", tmp_path / "coarse.nc"
+    for path, step in ((fine, 1), (coarse, 3)):
+        body = "".join(f"X{x}.\n" for x in range(step, 61, step))
+        path.write_text(f"G21 G90 G64\nG1 X0. Y0. Z0. F10000.\n{body}M30\n")
+    svg = tmp_path / "c.svg"
+    assert main(["compare", str(fine), str(coarse), "--svg", str(svg)]) == 0
+    out = capsys.readouterr().out
+    first = out.index("coarse.nc")
+    second = out.index("fine.nc")
+    assert first < second
+    text = svg.read_text()
+    ET.fromstring(text)
+    assert "#1 coarse.nc" in text and "#2 fine.nc" in text
+
+
+def test_compare_needs_two_programs(program):
+    """One program is not a comparison: a usage error."""
+    r = run("compare", program)
+    assert r.returncode == 2 and "two or more" in r.stderr

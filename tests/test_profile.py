@@ -131,8 +131,9 @@ def test_samples_follow_the_profile(models):
 
 def test_arc_samples_stay_on_the_circle(models):
     """Samples on a quarter arc of R 5 lie on the circle."""
-    pr = profile(models, [{"end": (5, 5, 0), "center": (0, 5, 0), "ccw": True}],
-                 jerk=(INF, INF, INF))
+    pr = profile(
+        models, [{"end": (5, 5, 0), "center": (0, 5, 0), "ccw": True}], jerk=(INF, INF, INF)
+    )
     s = pr.sample(0.001)
     r = np.hypot(s.x - 0.0, s.y - 5.0)
     assert np.allclose(r, 5.0)
@@ -146,10 +147,12 @@ def test_cycle_time_of_a_g_code_program(nc):
     base = "G21 G64 G1 X10 F6000\nX20\n"
     m = load_preset("linuxcnc-sim")  # A 2000 mm/s^2, no jerk limit
     t0 = build_profile(nc.evaluate(read_gcode(base.encode(), "a.nc"), m)).cycle_time
-    t1 = build_profile(nc.evaluate(read_gcode(b"G21 G61 G1 X10 F6000\nG64 X20\n", "b.nc"),
-                                   m)).cycle_time
-    t2 = build_profile(nc.evaluate(read_gcode(b"G21 G64 G1 X10 F6000\nG4 P0.25\nX20\n",
-                                              "c.ngc"), m)).cycle_time
+    t1 = build_profile(
+        nc.evaluate(read_gcode(b"G21 G61 G1 X10 F6000\nG64 X20\n", "b.nc"), m)
+    ).cycle_time
+    t2 = build_profile(
+        nc.evaluate(read_gcode(b"G21 G64 G1 X10 F6000\nG4 P0.25\nX20\n", "c.ngc"), m)
+    ).cycle_time
     # continuous: 20 mm at 100 mm/s plus one ramp 100 / 2000 = 0.05 s; stops: 2 * (0.1 + 0.05)
     assert t0 == pytest.approx(0.25)
     assert t1 == pytest.approx(0.30)

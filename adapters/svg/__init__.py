@@ -9,10 +9,11 @@ from __future__ import annotations
 
 import os
 
-from adapters.svg.render import render_svg, write_svg
-from core import Annotations, FileTarget, ToolPath, hookimpl
+from adapters.svg.render import render_comparison, render_svg, write_svg
+from core import Annotations, ComparisonTarget, FileTarget, ToolPath, hookimpl
+from core.output import atomic_writer
 
-__all__ = ["ncperf_display", "render_svg", "svg_target", "write_svg"]
+__all__ = ["ncperf_display", "render_comparison", "render_svg", "svg_target", "write_svg"]
 
 
 def svg_target(target: object) -> tuple[str, str] | None:
@@ -23,7 +24,7 @@ def svg_target(target: object) -> tuple[str, str] | None:
     target : str, os.PathLike or FileTarget
         A name ending in ``.svg`` (any case); a FileTarget brings its view.
     """
-    if isinstance(target, FileTarget):
+    if isinstance(target, FileTarget | ComparisonTarget):
         path, view = target.path, target.view
     elif isinstance(target, str | os.PathLike):
         path, view = target, "xy"
@@ -42,4 +43,9 @@ def ncperf_display(toolpath: ToolPath, annotations: Annotations, target: object)
     if found is None:
         return None
     path, view = found
+    if isinstance(target, ComparisonTarget):
+        data = render_comparison(target.panels, view)
+        with atomic_writer(path, binary=True) as fh:
+            fh.write(data)
+        return path
     return write_svg(toolpath, annotations, path, view)

@@ -160,18 +160,26 @@ class Frame:
         return out
 
 
-def fit_frame(lo: NDArray[np.float64], hi: NDArray[np.float64]) -> Frame:
+def fit_frame(
+    lo: NDArray[np.float64], hi: NDArray[np.float64], scale: float | None = None
+) -> Frame:
     """Fit the bounding box ``lo``..``hi`` (mm) into the plot area with a uniform scale.
 
     A zero extent along one axis (a vertical line seen from above) leaves the
     other axis to set the scale; a single point is drawn at 1 px/mm, centred.
+    ``scale`` (px/mm), when given, is used instead (it must fit: comparisons pass
+    the smallest scale of their panels so that all share it).
     """
     ext = np.maximum(hi - lo, 0.0)
-    room_w = PLOT_W - 2.0 * PAD
-    room_h = PLOT_H_MAX - 2.0 * PAD
-    cand = [room_w / ext[0] if ext[0] > 0 else np.inf, room_h / ext[1] if ext[1] > 0 else np.inf]
-    scale = min(cand)
-    scale = 1.0 if not np.isfinite(scale) else min(scale, MAX_SCALE)
+    if scale is None:
+        room_w = PLOT_W - 2.0 * PAD
+        room_h = PLOT_H_MAX - 2.0 * PAD
+        cand = [
+            room_w / ext[0] if ext[0] > 0 else np.inf,
+            room_h / ext[1] if ext[1] > 0 else np.inf,
+        ]
+        scale = min(cand)
+        scale = 1.0 if not np.isfinite(scale) else min(scale, MAX_SCALE)
     height = float(np.clip(ext[1] * scale + 2.0 * PAD, PLOT_H_MIN, PLOT_H_MAX))
     x0 = (PLOT_W - ext[0] * scale) / 2.0
     y0 = (height - ext[1] * scale) / 2.0
@@ -246,8 +254,8 @@ def _cell_key(q: NDArray[np.int64], cell: int) -> NDArray[np.int64]:
     return (c[:, 0] << 31) + c[:, 1]
 
 
-def strokes(tp: ToolPath, view: str) -> Strokes:
-    """Project, fit, sample the arcs and quantise every move of ``tp``."""
+def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
+    """Project, fit (at ``scale`` px/mm if given), sample the arcs and quantise every move."""
     proj = PROJECTIONS[view]
     n = tp.n
     uv_s = tp.start @ proj.T
@@ -293,7 +301,7 @@ def strokes(tp: ToolPath, view: str) -> Strokes:
         )
         lo = np.minimum(lo, samples.min(axis=0))
         hi = np.maximum(hi, samples.max(axis=0))
-    frame = fit_frame(lo, hi)
+    frame = fit_frame(lo, hi, scale)
 
     m = np.full(n, 2, dtype=np.int64)
     m[arcs] = counts + 1
@@ -951,6 +959,100 @@ def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
         w(b"</g>\n")
     w(_legend(ann, x_left, x_right, legend_y, info_y, notes).encode())
     w(b"</svg>\n")
+    return b"".join(s)
+
+
+def render_comparison(
+    panels: Sequence[tuple[str, ToolPath, Annotations]], view: str = "xy"
+) -> bytes:
+    """Several programs side by side, at one scale and in one colour scale (the reduction
+    classes), each with its discontinuity markers and worst zones.
+
+    Parameters
+    ----------
+    panels : sequence of (label, ToolPath, Annotations)
+        In the order to draw them, left to right.
+    view : {"xy", "xz", "yz", "iso"}
+    """
+    if view not in PROJECTIONS:
+        raise ValueError(f"view must be one of {VIEWS}, got {view!r}")
+    if not panels:
+        raise ValueError("nothing to compare")
+    for _, tp, ann in panels:
+        _check(tp, ann)
+    # One scale for all: the smallest that fits each program in its own panel.
+    scale = min(strokes(tp, view).frame.scale for _, tp, _ in panels)
+    drawn = [(label, tp, ann, strokes(tp, view, scale)) for label, tp, ann in panels]
+    first_ann = panels[0][2]
+    nclass = len(first_ann.class_labels)
+    rapid = _colour((first_ann.rapid_colour,), 0)
+    rapid_style = (
+        f'stroke="{rapid}" stroke-width="{round(RAPID_STROKE_PX * Q)}" '
+        f'stroke-dasharray="{4 * Q} {3 * Q}"',
+        "rapid",
+    )
+    plot_h = max(st.frame.height for *_, st in drawn)
+    width = 2 * MARGIN + len(drawn) * PLOT_W + (len(drawn) - 1) * GAP
+    legend_y = TOP + plot_h + 48.0
+    height = legend_y + ROW * (nclass + 3) + MARGIN
+    head = escape(f"ncperf compare on {first_ann.machine}: {VIEW_NAMES[view]} view, one scale")
+    plot_attrs = (
+        f'transform="scale({1 / Q:g})" fill="none" stroke-width="{round(STROKE_PX * Q)}"'
+        f' stroke-linecap="round" stroke-linejoin="round"'
+    )
+    s: list[bytes] = [
+        (
+            f'<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{width:.0f}" '
+            f'height="{height:.0f}" viewBox="0 0 {width:.0f} {height:.0f}" '
+            f'font-family="sans-serif" font-size="12">\n'
+            f"<title>{head}</title>\n"
+            f'<rect width="{width:.0f}" height="{height:.0f}" fill="#ffffff"/>\n'
+            f'<text x="{MARGIN:.0f}" y="28" font-size="16" font-weight="bold">{head}</text>\n'
+        ).encode()
+    ]
+    for k, (label, tp, ann, st) in enumerate(drawn):
+        x = MARGIN + k * (PLOT_W + GAP)
+        mc = np.asarray(ann.move_class, dtype=np.int64)
+        sev = np.where(tp.is_feed, np.clip(mc, 0, nclass - 1), -1)
+        styles = {-1: rapid_style}
+        for c in range(nclass):
+            styles[c] = (
+                f'stroke="{_colour(ann.class_colours, c)}"',
+                f"reduction {ann.class_labels[c]}",
+            )
+        groups, _ = panel(st, tp, sev, styles)
+        marks, _, _ = markers(st, tp, ann)
+        s.append(
+            (
+                f'<g transform="translate({x:.0f},{TOP:.0f})">\n'
+                f'<text x="0" y="-10" font-size="14" font-weight="bold">{escape(label)}</text>\n'
+                f'<rect width="{PLOT_W:.0f}" height="{st.frame.height:.1f}" fill="none" '
+                f'stroke="#cccccc"/>\n<g {plot_attrs}>\n'
+            ).encode()
+        )
+        s.extend(groups)
+        if marks:
+            s.append(f'<g stroke="#000000" stroke-width="{round(0.5 * Q)}">\n'.encode())
+            s.extend(marks)
+            s.append(b"</g>\n")
+        s.append(b"</g>\n")
+        s.append(_zones(ann.zones, st.frame, view).encode())
+        s.append(_scale_bar(st.frame).encode())
+        s.append(b"</g>\n")
+    out = [
+        '<g class="legend">\n',
+        f'<text x="{MARGIN:.0f}" y="{legend_y:.0f}" font-weight="bold">'
+        "Predicted feed reduction of blocks and discontinuities (all panels)</text>\n",
+    ]
+    yy = legend_y + ROW
+    for c, lab in enumerate(first_ann.class_labels):
+        out.append(_swatch(MARGIN, yy, _colour(first_ann.class_colours, c), lab))
+        yy += ROW
+    out.append(_swatch(MARGIN, yy, rapid, "rapid (G0)", rapid=True))
+    out.append("</g>\n")
+    s.append("".join(out).encode())
+    s.append(b"</svg>\n")
     return b"".join(s)
 
 

@@ -1,0 +1,78 @@
+"""Machining-strategy choice (the paper's title): several programs on one machine, ranked
+by predicted cycle time."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.annotations import zone_count
+from core.facade import Analysis
+from core.report import PER_MIN, at_feed_share, fmt_time, rapid_time
+
+
+@dataclass(frozen=True)
+class Row:
+    """One program of a comparison (lengths mm, times s, feeds mm/min)."""
+
+    label: str
+    feed_length: float
+    programmed_time: float
+    cycle_time: float
+    share_at_90: float
+    zones: int
+    mean_feed: float
+    worst_zone: str
+
+
+def row(label: str, an: Analysis) -> Row:
+    """The comparison figures of one analysed program."""
+    tp, pr = an.toolpath, an.profile
+    feed_time = float(pr.time[tp.is_feed].sum())
+    worst = an.annotations.zones[0] if an.annotations.zones else None
+    return Row(
+        label=label,
+        feed_length=tp.feed_length,
+        programmed_time=tp.programmed_time + rapid_time(an) + float(tp.dwell.sum()),
+        cycle_time=pr.cycle_time,
+        share_at_90=at_feed_share(pr, 0.9),
+        zones=zone_count(an.evaluation, pr),
+        mean_feed=tp.feed_length / feed_time * PER_MIN if feed_time > 0 else float("nan"),
+        worst_zone=(
+            f"lines {worst.lines}: {worst.time_lost:.2f} s lost ({worst.cause})"
+            if worst
+            else "none"
+        ),
+    )
+
+
+def ranked(rows: list[Row]) -> list[Row]:
+    """Fastest predicted cycle first."""
+    order = np.argsort([r.cycle_time for r in rows], kind="stable")
+    return [rows[i] for i in order]
+
+
+def table(rows: list[Row], machine: str) -> str:
+    """The comparison as text, ranked by predicted cycle time."""
+    rows = ranked(rows)
+    best = rows[0].cycle_time if rows else 0.0
+    head = (
+        f"{'#':>2s}  {'program':28s} {'feed length':>12s} {'programmed':>12s} "
+        f"{'predicted':>12s} {'vs best':>8s} {'>=90% F':>8s} {'zones':>6s} "
+        f"{'mean feed':>14s}  worst zone"
+    )
+    out = [
+        f"ncperf compare on {machine} (ranked by predicted cycle time; programmed = "
+        "feed at F + rapids + dwell)",
+        head,
+    ]
+    for k, r in enumerate(rows, start=1):
+        slower = (r.cycle_time / best - 1) * 100 if best > 0 else 0.0
+        name = r.label if len(r.label) <= 28 else "..." + r.label[-25:]
+        out.append(
+            f"{k:2d}  {name:28s} {r.feed_length:9.1f} mm {fmt_time(r.programmed_time):>12s} "
+            f"{fmt_time(r.cycle_time):>12s} {slower:+7.1f}% {r.share_at_90 * 100:7.1f}% "
+            f"{r.zones:6d} {r.mean_feed:7,.0f} mm/min  {r.worst_zone}"
+        )
+    return "\n".join(out)
