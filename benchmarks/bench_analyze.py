@@ -54,6 +54,7 @@ def run_cli(program: Path, svg: Path) -> tuple[float, float]:
 def stages(program: Path, svg: Path) -> dict[str, float]:
     """Seconds per stage of one in-process run."""
     from core import FileTarget, Ncperf, build_annotations, load_preset
+    from core.profile import build_profile
 
     t = {}
     t0 = time.perf_counter()
@@ -64,7 +65,10 @@ def stages(program: Path, svg: Path) -> dict[str, float]:
     ev = nc.evaluate(tp, load_preset("siemens-840d"))
     t["A2 evaluate (models)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
-    ann = build_annotations(ev)
+    pr = build_profile(ev)
+    t["feed profile (look-ahead, S-curve ramps)"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
+    ann = build_annotations(ev, pr)
     t["annotations + zones"] = time.perf_counter() - t0
     t0 = time.perf_counter()
     nc.display(tp, ann, FileTarget(str(svg)))
