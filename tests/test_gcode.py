@@ -511,3 +511,11 @@ def test_line_endings():
     for text in ("G21\r\nG1 X1 F60\r\nX2\r\n", "G21\rG1 X1 F60\rX2\r"):
         tp = read(text)
         assert np.array_equal(tp.end, lf.end) and list(tp.line) == [2, 3]
+
+
+def test_siemens_ctol_sets_the_path_tolerance():
+    """Siemens CTOL= is the path tolerance of the blocks after it (inch programs converted)."""
+    tp = read("G71 G642\nG1 X1 F600\nCTOL=0.02\nX2\nG70 X1\n", "t.mpf")
+    assert np.isnan(tp.tolerance[0])
+    assert tp.tolerance[1] == pytest.approx(0.02)
+    assert tp.tolerance[2] == pytest.approx(0.02 * 25.4)

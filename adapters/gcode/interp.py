@@ -516,6 +516,13 @@ class Interpreter:
             setl = pm >= 0
             tol = np.where((pm == 640) & self.pres["P"], self.vals["P"] * self.scale, np.nan)
             cols["tolerance"] = _ffill(tol, setl, np.nan)[mi]
+        ctol = [(line, v) for line, name, v in self.w.settings if name == "CTOL"]
+        if ctol:
+            at = np.array([line for line, _ in ctol])
+            val = np.array([v for _, v in ctol])
+            # The last CTOL at or before each move's line, in that line's units.
+            k = np.searchsorted(at, al[mi], side="right") - 1
+            cols["tolerance"] = np.where(k >= 0, val[np.maximum(k, 0)] * self.scale[mi], np.nan)
 
         # Tools and operations.
         tvals, tpres = self.vals["T"], self.pres["T"]

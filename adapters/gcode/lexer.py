@@ -62,6 +62,8 @@ class Words:
         Lines starting with "/".
     keywords : list of (line, keyword)
         Siemens keywords seen (for notices and dialect detection).
+    settings : list of (line, name, value)
+        Siemens settings ncperf reads (CTOL, the contour tolerance), in program units.
     """
 
     line: NDArray[np.int64]
@@ -71,6 +73,7 @@ class Words:
     n_lines: int
     block_delete: set[int] = field(default_factory=set)
     keywords: list[tuple[int, str]] = field(default_factory=list)
+    settings: list[tuple[int, str, float]] = field(default_factory=list)
     special_lines: int = 0
 
 
@@ -416,6 +419,10 @@ def tokenize_line(src: Source, i: int, words: Words) -> list[tuple[int, int, flo
                 words.keywords.append((i, "CR="))
             elif name in W.PASS_ASSIGNMENTS:
                 words.keywords.append((i, name + "="))
+                if name in W.SETTINGS:
+                    if not _NUMBER.match(rhs):
+                        raise src.error(i, f"{name}={rhs} is not a number")
+                    words.settings.append((i, name, float(rhs)))
             else:
                 raise src.error(
                     i,

@@ -297,4 +297,7 @@ CONTROL_FLOW = (
     "CONTINUE",
 )
 #: Siemens assignments that do not change the path (smoothing distances, tolerances).
+#: Siemens settings that ncperf reads: CTOL, the contour tolerance of G642/G645 smoothing
+#: and compressors, is the path tolerance of the blocks that follow (like LinuxCNC G64 P).
+SETTINGS = {"CTOL"}
 PASS_ASSIGNMENTS = {"ADIS": "", "ADISPOS": "", "CTOL": "", "OTOL": "", "ATOL": "", "SD": ""}
