@@ -17,6 +17,7 @@ from core.machine import Machine
 from core.plugins import make_plugin_manager
 from core.profile import Profile, build_profile
 from core.toolpath import ExtractOptions, ToolPath
+from core.trace import Trace, TraceOptions
 
 
 @dataclass(frozen=True, eq=False)
@@ -94,6 +95,19 @@ class Ncperf:
         """The paper's Figure 5: extract, evaluate, display."""
         analysis = self.analyze(source, machine, options)
         return analysis, self.display(analysis.toolpath, analysis.annotations, target)
+
+    # traces
+    def read_trace(self, source: object, options: TraceOptions | None = None) -> Trace:
+        """Read a measured trace; UsageError when no reader recognises it."""
+        tr = self.pm.hook.ncperf_read_trace(source=source, options=options or TraceOptions())
+        if tr is None:
+            raise UsageError(
+                f"{source}: no trace reader recognises this source "
+                f"(readers: {', '.join(self.implementers('ncperf_read_trace'))})"
+            )
+        if not isinstance(tr, Trace):
+            raise TypeError(f"ncperf_read_trace returned {type(tr).__name__}, not Trace")
+        return tr
 
     # command line
     def add_commands(self, subparsers: argparse._SubParsersAction) -> None:

@@ -21,6 +21,7 @@ if TYPE_CHECKING:
     from core.indicators import Indicator
     from core.machine import Machine
     from core.toolpath import ExtractOptions, ToolPath
+    from core.trace import Trace, TraceOptions
 
 PROJECT = "ncperf"
 
@@ -83,4 +84,18 @@ def ncperf_add_commands(subparsers: argparse._SubParsersAction) -> None:
 
     :param subparsers: the ``argparse`` sub-parser collection of ``ncperf``.
     :returns: nothing.
+    """
+
+
+@hookspec(firstresult=True)
+def ncperf_read_trace(source: object, options: TraceOptions) -> Trace | None:
+    """Read a measured trace (positions, feed, program lines over time).
+
+    Stops at the first non-None result: a reader returns None for a source it does not
+    recognise, and raises :class:`~core.errors.InputError` (file and line) for one it
+    recognises but cannot read faithfully (non-monotone time, NaN rows...).
+
+    :param source: a file path or a host object.
+    :param options: units and kind (setpoint or actual) the user gave, if any.
+    :returns: the trace (mm, s), or None.
     """

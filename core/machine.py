@@ -77,6 +77,11 @@ class Machine:
     path_tolerance: float
     curvature_transition_time: float
     source: str = "<memory>"
+    #: Share of the acceleration usable as normal acceleration (corners, capped arcs); the
+    #: paper's model uses all of it. Set by the normal_acceleration_factor effect.
+    normal_acceleration_factor: float = 1.0
+    #: Effects the machine file switches on: (name, {param: value}, line of the table).
+    effects: tuple[tuple[str, dict[str, float], int | None], ...] = ()
 
     def __post_init__(self) -> None:
         for key in AXIS_KEYS:
@@ -190,6 +195,7 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         raise MachineError(
             f"not valid TOML: {msg}", source=source, line=int(m.group(1)) if m else None
         ) from None
+    effects = _effects(data.pop("effects", {}), source, text)
     _check_keys(data, TOP_KEYS, "", source, text)
     name = data["name"]
     if not isinstance(name, str) or not name.strip():
@@ -222,8 +228,42 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         max_acceleration=np.array(per_axis["max_acceleration"]),
         max_jerk=np.array(per_axis["max_jerk"]),
         source=source,
+        effects=effects,
         **c,
     )
+
+
+def _effects(table: object, source: str, text: str) -> tuple:
+    """``[effects.NAME]`` tables: names and numeric parameters (checked against the effects
+    ncperf knows when they are used)."""
+    if not isinstance(table, dict):
+        raise MachineError(
+            "'effects' must hold tables [effects.NAME]",
+            source=source,
+            line=_line_of(text, "effects"),
+        )
+    out = []
+    for name, params in table.items():
+        line = _table_line(text, f"effects.{name}")
+        if not isinstance(params, dict):
+            raise MachineError(
+                f"[effects.{name}] must be a table of parameters", source=source, line=line
+            )
+        vals = {}
+        for key, value in params.items():
+            if (
+                isinstance(value, bool)
+                or not isinstance(value, int | float)
+                or not math.isfinite(float(value))
+            ):
+                raise MachineError(
+                    f"'{key}' in [effects.{name}] must be a finite number, got {value!r}",
+                    source=source,
+                    line=_line_of(text, key, f"effects.{name}"),
+                )
+            vals[key] = float(value)
+        out.append((name, vals, line))
+    return tuple(out)
 
 
 def load_machine_file(path: str | Path) -> Machine:

@@ -23,6 +23,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "adapters.cl_data",
     "adapters.esprit_com",
     "adapters.svg",
+    "adapters.traces",
     "plugins.tangential",
     "plugins.curvature",
     "plugins.ncu_capacity",

@@ -123,7 +123,9 @@ def corner_feed(
     # An axis with no share over the arc sets no limit.
     with np.errstate(divide="ignore", invalid="ignore"):
         v_feed = np.where(share_t > 0, machine.max_feed / share_t, inf)
-        v_acc = np.where(share_n > 0, np.sqrt(machine.max_acceleration * R / share_n), inf)
+        # The normal acceleration may use only a share of A (an effect; 1 in the paper).
+        a_n = machine.max_acceleration * machine.normal_acceleration_factor
+        v_acc = np.where(share_n > 0, np.sqrt(a_n * R / share_n), inf)
         v_jerk = np.where(share_t > 0, np.cbrt(machine.max_jerk * R**2 / share_t), inf)
     # inf jerk times a zero radius is NaN: no radius means a stop.
     cand = np.nan_to_num(np.concatenate([v_feed, v_acc, v_jerk], axis=1), nan=0.0, posinf=inf)

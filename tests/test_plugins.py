@@ -186,6 +186,7 @@ def test_every_hook_is_documented_and_tested(hook):
         "ncperf_evaluate": "evaluate(",
         "ncperf_display": "display(",
         "ncperf_add_commands": "add_commands(",
+        "ncperf_read_trace": "read_trace(",
     }[hook]
     assert f"nc.{method}" in tests
 
@@ -201,3 +202,12 @@ def test_plugin_adds_a_command(capsys):
     args = parser.parse_args(["sample", "--echo", "yo"])
     assert args.run(args, nc) == 0
     assert "echo yo" in capsys.readouterr().out
+
+
+def test_plugin_reads_a_trace():
+    """A plugin's ncperf_read_trace serves a host recording through the facade."""
+    nc = Ncperf(make_plugin_manager(entry_points=False, extra=[sample]))
+    tr = nc.read_trace(sample.SampleTrace(t=[0.0, 0.1, 0.2], v=[0.0, 5.0, 0.0], line=[1, 1, 2]))
+    assert tr.source == "sample trace" and len(tr) == 3 and tr.pos is None
+    with pytest.raises(UsageError, match="no trace reader recognises"):
+        nc.read_trace(object())

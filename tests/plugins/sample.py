@@ -70,3 +70,21 @@ def ncperf_add_commands(subparsers):
     p = subparsers.add_parser("sample", help="a command added by the sample plugin")
     p.add_argument("--echo", default="hi")
     p.set_defaults(run=_run_sample)
+
+
+@dataclass
+class SampleTrace:
+    """A host that hands over a recording directly."""
+
+    t: list
+    v: list
+    line: list
+
+
+@hookimpl
+def ncperf_read_trace(source, options):
+    if not isinstance(source, SampleTrace):
+        return None
+    from core.trace import Trace
+
+    return Trace(t=source.t, pos=None, v=source.v, line=source.line, source="sample trace")

@@ -1,0 +1,286 @@
+"""Trace readers: CSV with a header, and MTConnect SHDR text.
+
+* CSV (``.csv``): a header naming the columns, ``t`` (s) and ``x,y,z`` (positions) and/or
+  ``v`` (path feed, units/s), optionally ``line`` (1-based program line); other columns are
+  ignored. The LinuxCNC traces of the shared harness are this format. Positions are taken as
+  the controller's setpoint unless ``--trace-kind actual``.
+* MTConnect SHDR (``timestamp|key|value`` lines, event-based): ``Feed_Rate`` (mm/s, the
+  actual path feed), ``Block_Number`` (the program line), positions from ``Xact``/``Yact``/
+  ``Zact`` (or ``Xabs``...) when recorded; every value is held until it changes, so each
+  event time becomes a sample. Taken as actual values.
+
+Both give one-line errors naming file and line for what they cannot read faithfully:
+missing columns, malformed numbers, NaN, time going backwards.
+"""
+
+from __future__ import annotations
+
+import os
+import re
+from datetime import UTC, datetime, timezone
+from pathlib import Path
+
+import numpy as np
+
+from core import InputError, Notice, hookimpl
+from core.trace import Trace, TraceOptions
+
+INCH = 25.4
+#: A pause longer than this many median sample periods is a gap in the recording.
+GAP_PERIODS = 20
+
+_SHDR = re.compile(r"^\s*\d{4}-\d\d-\d\dT[0-9:.]+Z?\|[^|]*\|")
+_POS_KEYS = (("Xact", "Yact", "Zact"), ("Xabs", "Yabs", "Zabs"), ("Xpos", "Ypos", "Zpos"))
+
+
+def _path(source: object) -> Path | None:
+    return Path(source) if isinstance(source, str | os.PathLike) else None
+
+
+def _scale(options: TraceOptions, name: str) -> tuple[float, str]:
+    units = options.units or "mm"
+    if units not in ("mm", "inch"):
+        raise InputError(f"unknown trace units '{units}' (mm or inch)", source=name)
+    return (INCH if units == "inch" else 1.0), units
+
+
+def _time_checks(t: np.ndarray, name: str, first_line: int) -> list[Notice]:
+    """Time must increase; long pauses in the recording are reported."""
+    dt = np.diff(t)
+    back = np.flatnonzero(dt <= 0)
+    if back.size:
+        k = int(back[0])
+        raise InputError(
+            f"time does not increase ({t[k]:g} s, then {t[k + 1]:g} s)",
+            source=name,
+            line=first_line + k + 1,
+        )
+    notes = []
+    if dt.size:
+        period = float(np.median(dt))
+        gaps = np.flatnonzero(dt > GAP_PERIODS * period)
+        if gaps.size:
+            k = int(gaps[np.argmax(dt[gaps])])
+            notes.append(
+                Notice(
+                    name,
+                    first_line + k,
+                    f"the recording pauses {gaps.size} times (longest {dt[k]:.3g} s; samples "
+                    f"every {period:.3g} s elsewhere): nothing is known there",
+                    int(gaps.size),
+                )
+            )
+    return notes
+
+
+# ---------------------------------------------------------------------------- CSV
+def read_csv_trace(path: Path, options: TraceOptions) -> Trace:
+    """A CSV trace with a header (see the module docstring)."""
+    name = str(path)
+    try:
+        with open(path, encoding="utf-8", errors="strict") as fh:
+            header = fh.readline()
+            body = fh.read()
+    except UnicodeDecodeError:
+        raise InputError("not a text file", source=name) from None
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror}", source=name) from None
+    cols = [c.strip().lower() for c in header.strip().split(",")]
+    if not header.strip():
+        raise InputError("empty trace file", source=name)
+    if "t" not in cols:
+        raise InputError(
+            f"no 't' column in the header (columns: {', '.join(cols)})", source=name, line=1
+        )
+    has_pos = all(c in cols for c in ("x", "y", "z"))
+    if not has_pos and any(c in cols for c in ("x", "y", "z")):
+        raise InputError("positions need all of x, y and z", source=name, line=1)
+    has_v = "v" in cols
+    if not (has_pos or has_v):
+        raise InputError("the trace needs x,y,z positions or a v column", source=name, line=1)
+    lines = body.splitlines()
+    if not lines:
+        raise InputError("no samples after the header", source=name, line=1)
+    want = ["t"] + (["x", "y", "z"] if has_pos else []) + (["v"] if has_v else [])
+    if "line" in cols:
+        want.append("line")
+    idx = [cols.index(c) for c in want]
+    data = _parse_rows(lines, idx, len(cols), name)
+    col = {c: data[:, k] for k, c in enumerate(want)}
+    scale, units = _scale(options, name)
+    notes = _time_checks(col["t"], name, 2)
+    t = col["t"]
+    line = None
+    if "line" in col:
+        line = col["line"].astype(np.int64)
+        if np.any(line != col["line"]) or np.any(line < 0):
+            k = int(np.flatnonzero((line != col["line"]) | (line < 0))[0])
+            raise InputError(
+                "line must be a non-negative whole number", source=name, line=k + 2, text=lines[k]
+            )
+    return Trace(
+        t=t - t[0],
+        pos=np.column_stack([col["x"], col["y"], col["z"]]) * scale if has_pos else None,
+        v=col["v"] * scale if has_v else None,
+        line=line,
+        source=name,
+        kind=options.kind or "setpoint",
+        units=units,
+        notices=tuple(notes),
+    )
+
+
+def _parse_rows(lines: list[str], idx: list[int], ncols: int, name: str) -> np.ndarray:
+    """Numbers of the wanted columns, with the file line of any bad row."""
+    try:
+        arr = np.loadtxt(lines, delimiter=",", usecols=idx, ndmin=2, dtype=np.float64)
+        good = np.isfinite(arr).all(axis=1)
+        if good.all() and arr.shape[0] == len(lines):
+            return arr
+    except ValueError:
+        pass
+    # Slow path: find the first bad row and say what is wrong with it.
+    out = np.empty((len(lines), len(idx)))
+    for k, text in enumerate(lines):
+        parts = text.split(",")
+        if len(parts) != ncols:
+            raise InputError(
+                f"{len(parts)} columns, the header has {ncols}", source=name, line=k + 2, text=text
+            )
+        for j, c in enumerate(idx):
+            try:
+                val = float(parts[c])
+            except ValueError:
+                raise InputError(
+                    f"'{parts[c].strip()}' is not a number", source=name, line=k + 2, text=text
+                ) from None
+            if not np.isfinite(val):
+                raise InputError(
+                    f"'{parts[c].strip()}' (NaN or infinite) in a sample",
+                    source=name,
+                    line=k + 2,
+                    text=text,
+                )
+            out[k, j] = val
+    return out
+
+
+# ---------------------------------------------------------------------------- SHDR
+def _seconds(stamp: str) -> float:
+    """Seconds since the epoch of an ISO timestamp with any number of fraction digits."""
+    stamp = stamp.strip().rstrip("Z")
+    main, _, frac = stamp.partition(".")
+    base = datetime.strptime(main, "%Y-%m-%dT%H:%M:%S").replace(tzinfo=UTC)
+    return base.timestamp() + (float("0." + frac) if frac else 0.0)
+
+
+def read_shdr_trace(path: Path, options: TraceOptions) -> Trace:
+    """An MTConnect SHDR recording (see the module docstring)."""
+    name = str(path)
+    try:
+        text = path.read_text(encoding="utf-8")
+    except UnicodeDecodeError:
+        raise InputError("not a text file", source=name) from None
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror}", source=name) from None
+    scale, units = _scale(options, name)
+    events: dict[str, list[tuple[float, str, int]]] = {}
+    first = None
+    last_t = -np.inf
+    for k, raw in enumerate(text.splitlines(), start=1):
+        if not raw.strip():
+            continue
+        parts = raw.strip().split("|")
+        if len(parts) < 3 or len(parts) % 2 == 0:
+            raise InputError("not a 'timestamp|key|value' line", source=name, line=k, text=raw)
+        try:
+            t = _seconds(parts[0])
+        except ValueError:
+            raise InputError(f"bad timestamp '{parts[0]}'", source=name, line=k, text=raw) from None
+        if t < last_t:
+            raise InputError("time goes backwards", source=name, line=k, text=raw)
+        last_t = t
+        first = t if first is None else first
+        for key, value in zip(parts[1::2], parts[2::2], strict=True):
+            events.setdefault(key, []).append((t - first, value, k))
+    if "Feed_Rate" not in events and not any(p[0] in events for p in _POS_KEYS):
+        raise InputError(
+            "no Feed_Rate and no positions (Xact/Yact/Zact) in the recording", source=name
+        )
+
+    def numbers(key: str) -> tuple[np.ndarray, np.ndarray]:
+        ts, vs = [], []
+        for t, value, k in events.get(key, []):
+            if value.strip().upper() == "UNAVAILABLE":
+                v = np.nan
+            else:
+                try:
+                    v = float(value)
+                except ValueError:
+                    raise InputError(
+                        f"{key} '{value}' is not a number", source=name, line=k
+                    ) from None
+                if not np.isfinite(v):
+                    raise InputError(f"{key} is {value}", source=name, line=k)
+            ts.append(t)
+            vs.append(v)
+        return np.array(ts), np.array(vs)
+
+    channels = {"v": numbers("Feed_Rate"), "line": numbers("Block_Number")}
+    pos_keys = next((p for p in _POS_KEYS if p[0] in events), None)
+    if pos_keys:
+        for axis, key in zip("xyz", pos_keys, strict=True):
+            channels[axis] = numbers(key)
+    # Samples at every event time after every channel has a value (sample and hold).
+    present = {c: ts for c, (ts, _) in channels.items() if ts.size}
+    start = max(ts[0] for ts in present.values())
+    times = np.unique(np.concatenate(list(present.values())))
+    times = times[times >= start]
+    held = {}
+    for c, (ts, vs) in channels.items():
+        if ts.size:
+            held[c] = vs[np.searchsorted(ts, times, side="right") - 1]
+    v = held.get("v")
+    ok = np.ones(times.size, dtype=bool)
+    for arr in held.values():
+        ok &= np.isfinite(arr)
+    notes = []
+    if not ok.all():
+        notes.append(
+            Notice(name, None, "UNAVAILABLE values: those stretches are left out", int((~ok).sum()))
+        )
+    times = times[ok]
+    # Event data: a long silence means nothing changed, not a gap in the recording.
+    pos = None
+    if pos_keys:
+        pos = np.column_stack([held[a][ok] for a in "xyz"]) * scale
+    line = held["line"][ok].astype(np.int64) if "line" in held else None
+    return Trace(
+        t=times - times[0],
+        pos=pos,
+        v=v[ok] * scale if v is not None else None,
+        line=line,
+        source=name,
+        kind=options.kind or "actual",
+        units=units,
+        notices=tuple(notes),
+    )
+
+
+@hookimpl
+def ncperf_read_trace(source: object, options: TraceOptions) -> Trace | None:
+    """CSV traces by extension, SHDR recordings by their first line."""
+    path = _path(source)
+    if path is None:
+        return None
+    if path.suffix.lower() == ".csv":
+        return read_csv_trace(path, options)
+    try:
+        with open(path, "rb") as fh:
+            head = fh.read(512).decode("utf-8", "replace")
+    except OSError as exc:
+        raise InputError(f"cannot read: {exc.strerror}", source=str(path)) from None
+    first = next((ln for ln in head.splitlines() if ln.strip()), "")
+    if _SHDR.match(first):
+        return read_shdr_trace(path, options)
+    return None

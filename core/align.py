@@ -1,0 +1,343 @@
+"""Aligning a measured trace with the program: each sample's place on the path (arc length).
+
+* With positions, each sample is projected on the path, near the move of its program line
+  when the trace has lines, else within a window ahead of where the previous samples were;
+  a rigid offset between program and machine coordinates is fitted first (and reported);
+  the arc lengths are then made non-decreasing in time (isotonic regression), which absorbs
+  noise and small back-steps.
+* With program lines and a feed but no positions (MTConnect recordings), a sample is at the
+  start of its block plus the distance the feed covered since the block began, within the
+  block.
+
+The measured feed is the trace's own where it has one, else the derivative of the arc length
+over time, lightly smoothed. Alignment quality -- how far the samples are from the path, how
+much of the path the trace covers -- is measured and stated, so that a trace of another
+program, or in other units, is reported as such rather than diagnosed.
+"""
+
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from core import geometry as g
+from core.profile import points_along
+from core.toolpath import ToolPath
+from core.trace import Trace
+
+#: Path sampling step for projection (mm).
+STEP = 0.05
+#: Samples per sequential search chunk without line numbers, and how far ahead (mm) beyond
+#: what the fastest move could cover a chunk may look.
+CHUNK = 256
+AHEAD_MARGIN = 5.0
+#: A sample farther than this from the path (mm) is "off the path" for the quality figures
+#: (at least; 20 x the largest path tolerance when that is larger).
+FAR = 0.5
+#: Alignment is poor when more than this share of samples is off the path, or when the trace
+#: covers less than MIN_COVERAGE of the program's feed length.
+MAX_FAR_SHARE = 0.2
+MIN_COVERAGE = 0.5
+#: Half-width (samples) of the central difference that turns arc length into feed.
+DIFF_HALF = 2
+
+
+@dataclass(frozen=True, eq=False)
+class Alignment:
+    """A trace placed on a program's path.
+
+    Attributes
+    ----------
+    s : (m,) float, mm
+        Arc length of each sample from the program start (rapids included),
+        non-decreasing.
+    v : (m,) float, mm/s
+        Measured path feed at each sample.
+    t : (m,) float, s
+    line : (m,) int
+        Program line of each sample (from the trace, or from where it was placed).
+    method : str
+        "line and feed", "line and position" or "position".
+    offset : (3,) float, mm
+        Rigid offset of the trace's coordinates from the program's (trace - program).
+    distance : (m,) float, mm
+        Distance of each sample from the path (NaN without positions).
+    coverage : float
+        Share of the program's feed length the trace runs along.
+    far_share : float
+        Share of samples farther than the "off the path" distance.
+    ok : bool
+        Whether the alignment is good enough to diagnose.
+    message : str
+        One line on the quality (and, when poor, what it suggests).
+    """
+
+    s: NDArray[np.float64]
+    v: NDArray[np.float64]
+    t: NDArray[np.float64]
+    line: NDArray[np.int64]
+    method: str
+    offset: NDArray[np.float64]
+    distance: NDArray[np.float64]
+    coverage: float
+    far_share: float
+    ok: bool
+    message: str
+    notes: tuple[str, ...] = field(default_factory=tuple)
+
+
+def isotonic(y: NDArray[np.float64]) -> NDArray[np.float64]:
+    """Least-squares non-decreasing fit of ``y`` (pool adjacent violators)."""
+    y = np.asarray(y, dtype=np.float64)
+    if y.size == 0 or np.all(np.diff(y) >= 0):
+        return y.copy()
+    vals: list[float] = []
+    counts: list[int] = []
+    for v in y.tolist():
+        vals.append(v)
+        counts.append(1)
+        while len(vals) > 1 and vals[-2] > vals[-1]:
+            c = counts[-2] + counts[-1]
+            vals[-2] = (vals[-2] * counts[-2] + vals[-1] * counts[-1]) / c
+            counts[-2] = c
+            vals.pop()
+            counts.pop()
+    return np.repeat(np.array(vals), np.array(counts))
+
+
+def sample_path(tp: ToolPath, step: float = STEP) -> tuple[NDArray, NDArray, NDArray]:
+    """Points every ``step`` mm along the path: (positions (p, 3), arc length (p,), move (p,))."""
+    counts = np.maximum(np.ceil(tp.length / step).astype(np.int64), 1)
+    owner = np.repeat(np.arange(tp.n), counts + 1)
+    first = np.cumsum(counts + 1) - (counts + 1)
+    k = np.arange(owner.size) - first[owner]
+    d = k / counts[owner] * tp.length[owner]
+    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
+    return points_along(tp, owner, d), start_s[owner] + d, owner
+
+
+def _nearest(q: NDArray, p: NDArray) -> tuple[NDArray, NDArray]:
+    """Index of the nearest of ``p`` (k, 3) for each of ``q`` (m, 3), and the distance."""
+    d2 = np.einsum("ij,ij->i", q, q)[:, None] - 2 * q @ p.T + np.einsum("ij,ij->i", p, p)[None, :]
+    k = np.argmin(d2, axis=1)
+    return k, np.sqrt(np.maximum(d2[np.arange(q.shape[0]), k], 0.0))
+
+
+def _project(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> tuple[NDArray, NDArray]:
+    """Arc length and distance of points ``q`` on the path (see the module docstring)."""
+    pts, s_p, owner = path
+    m = q.shape[0]
+    s = np.zeros(m)
+    dist = np.full(m, np.inf)
+    if lines is not None and np.any(lines > 0):
+        line_of_sample = lines
+        moves_of_line: dict[int, tuple[int, int]] = {}
+        lp = tp.line
+        order = np.argsort(lp, kind="stable")
+        uniq, first_idx = np.unique(lp[order], return_index=True)
+        last_idx = np.append(first_idx[1:], order.size)
+        for u, a, b in zip(uniq.tolist(), first_idx.tolist(), last_idx.tolist(), strict=True):
+            mv = order[a:b]
+            moves_of_line[u] = (int(mv.min()), int(mv.max()))
+        done = np.zeros(m, dtype=bool)
+        for u in np.unique(line_of_sample).tolist():
+            if u not in moves_of_line:
+                continue
+            sel = np.flatnonzero(line_of_sample == u)
+            a, b = moves_of_line[u]
+            # The move of the line and its neighbours (blends carry a neighbour's line).
+            win = np.flatnonzero((owner >= a - 1) & (owner <= b + 1))
+            for c in range(0, sel.size, 2048):
+                part = sel[c : c + 2048]
+                k, dd = _nearest(q[part], pts[win])
+                s[part] = s_p[win[k]]
+                dist[part] = dd
+            done[sel] = True
+        rest = np.flatnonzero(~done)
+    else:
+        rest = np.arange(m)
+    if rest.size:
+        # Sequential windows: each chunk searches ahead of where the last one ended.
+        s_last = s[rest[0] - 1] if rest[0] > 0 else 0.0
+        for c in range(0, rest.size, CHUNK):
+            part = rest[c : c + CHUNK]
+            # The chunk cannot run further along the path than its samples travel.
+            travel = float(np.linalg.norm(np.diff(q[part], axis=0), axis=1).sum())
+            span = 2.0 * travel + AHEAD_MARGIN
+            win = np.flatnonzero((s_p >= s_last - AHEAD_MARGIN) & (s_p <= s_last + span))
+            if win.size == 0:
+                win = np.arange(s_p.size)
+            k, dd = _nearest(q[part], pts[win])
+            s[part] = s_p[win[k]]
+            dist[part] = dd
+            s_last = float(np.median(s[part][-8:]))
+    return s, dist
+
+
+def _refine(q: NDArray, s_guess: NDArray, path, half_width: float = 1.0) -> tuple[NDArray, NDArray]:
+    """Nearest path point to each sample among those within +-half_width mm of arc length
+    of its guess: the guess decides which pass of the path, the projection where on it."""
+    pts, s_p, _ = path
+    k_off = np.arange(-int(half_width / STEP), int(half_width / STEP) + 1)
+    s = np.empty(q.shape[0])
+    dist = np.empty(q.shape[0])
+    for c in range(0, q.shape[0], 8192):
+        part = slice(c, c + 8192)
+        j = np.searchsorted(s_p, s_guess[part])
+        cand = np.clip(j[:, None] + k_off[None, :], 0, s_p.size - 1)
+        diff = pts[cand] - q[part][:, None, :]
+        d2 = np.einsum("mkj,mkj->mk", diff, diff)
+        best = np.argmin(d2, axis=1)
+        rows = np.arange(best.size)
+        s[part] = s_p[cand[rows, best]]
+        dist[part] = np.sqrt(d2[rows, best])
+    return s, dist
+
+
+def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> NDArray:
+    """Rigid offset (trace - program) by iterated projection (translation-only ICP)."""
+    pts = path[0]
+    cands = [np.zeros(3), q[0] - tp.start[0], np.median(q, axis=0) - np.median(pts, axis=0)]
+    sub = q[:: max(1, q.shape[0] // 2000)]
+    sub_lines = None if lines is None else lines[:: max(1, q.shape[0] // 2000)]
+    best, best_d = np.zeros(3), np.inf
+    for off in cands:
+        _, d = _project(tp, sub - off, sub_lines, path)
+        med = float(np.median(d))
+        if med < best_d:
+            best, best_d = off, med
+    off = best
+    for _ in range(6):
+        s, _ = _project(tp, sub - off, sub_lines, path)
+        near = _point_at(tp, s)
+        step = np.median(sub - off - near, axis=0)
+        off = off + step
+        if np.linalg.norm(step) < 1e-4:
+            break
+    return off
+
+
+def _point_at(tp: ToolPath, s: NDArray) -> NDArray:
+    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
+    k = np.clip(np.searchsorted(start_s, s, side="right") - 1, 0, tp.n - 1)
+    d = np.clip(s - start_s[k], 0.0, tp.length[k])
+    return points_along(tp, k, d)
+
+
+def _feed_from_s(t: NDArray, s: NDArray) -> NDArray:
+    """ds/dt by central differences over +-DIFF_HALF samples (one-sided at the ends)."""
+    h = DIFF_HALF
+    if t.size <= 2 * h:
+        return np.gradient(s, t) if t.size > 1 else np.zeros_like(s)
+    v = np.empty_like(s)
+    v[h:-h] = (s[2 * h :] - s[: -2 * h]) / (t[2 * h :] - t[: -2 * h])
+    v[:h] = (s[h : 2 * h] - s[:h]) / (t[h : 2 * h] - t[:h])
+    v[-h:] = (s[-h:] - s[-2 * h : -h]) / (t[-h:] - t[-2 * h : -h])
+    return np.maximum(v, 0.0)
+
+
+def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True) -> Alignment:
+    """Place every sample of ``trace`` on the path of ``tp`` (see the module docstring)."""
+    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
+    end_s = start_s + tp.length
+    total_feed = float(tp.length[tp.is_feed].sum()) or float(tp.length.sum())
+    tol = np.nan_to_num(tp.tolerance, nan=0.0)
+    far = max(FAR, 20.0 * float(tol.max(initial=0.0)))
+    notes: list[str] = []
+    if trace.pos is not None:
+        path = sample_path(tp)
+        off = _offset(tp, trace.pos, trace.line, path) if fit_offset else np.zeros(3)
+        q = trace.pos - off
+        s_raw, dist = _project(tp, q, trace.line, path)
+        s = isotonic(s_raw)
+        for _ in range(2):
+            s_raw, _ = _refine(q, s, path)
+            s = isotonic(s_raw)
+        dist = g.norm(q - _point_at(tp, s))
+        method = "line and position" if trace.line is not None else "position"
+        v = trace.v if trace.v is not None else _feed_from_s(trace.t, s)
+        if trace.v is None:
+            notes.append(
+                f"feed derived from positions (arc length over time, +-{DIFF_HALF} samples)"
+            )
+        if np.linalg.norm(off) > far:
+            notes.append(
+                f"trace coordinates offset by ({off[0]:.3f}, {off[1]:.3f}, "
+                f"{off[2]:.3f}) mm from the program's"
+            )
+        line = (
+            trace.line
+            if trace.line is not None
+            else tp.line[np.clip(np.searchsorted(start_s, s, side="right") - 1, 0, tp.n - 1)]
+        )
+        far_share = float(np.mean(dist > far))
+    elif trace.line is not None and trace.v is not None:
+        off = np.zeros(3)
+        method = "line and feed"
+        line = trace.line
+        # Each line's first move (lines without moves: the next move's start).
+        first_move = np.full(int(max(tp.line.max(), line.max())) + 2, -1, dtype=np.int64)
+        first_move[tp.line[::-1]] = np.arange(tp.n)[::-1]
+        last_move = np.full_like(first_move, -1)
+        last_move[tp.line] = np.arange(tp.n)
+        nxt = first_move.copy()
+        # Lines without a move start where the next line with a move starts.
+        idx = np.where(nxt >= 0, np.arange(nxt.size), nxt.size)
+        idx = np.minimum.accumulate(idx[::-1])[::-1]
+        nxt = np.where(idx < nxt.size, first_move[np.minimum(idx, nxt.size - 1)], tp.n)
+        known = (line >= 0) & (line < nxt.size)
+        mv0 = np.where(known, nxt[np.clip(line, 0, nxt.size - 1)], tp.n)
+        s0 = np.where(mv0 < tp.n, start_s[np.minimum(mv0, tp.n - 1)], end_s[-1])
+        mv1 = np.where(known, last_move[np.clip(line, 0, nxt.size - 1)], -1)
+        s1 = np.where(mv1 >= 0, end_s[np.maximum(mv1, 0)], s0)
+        # Distance run since the block began: integrate the held feed over time.
+        change = np.ones(line.size, dtype=bool)
+        change[1:] = line[1:] != line[:-1]
+        block = np.cumsum(change) - 1
+        dt = np.diff(trace.t, prepend=trace.t[0])
+        run = np.cumsum(np.concatenate([[0.0], trace.v[:-1]]) * dt)
+        run_at_start = run[np.flatnonzero(change)][block]
+        s = isotonic(np.minimum(s0 + (run - run_at_start), np.maximum(s1, s0)))
+        v = trace.v
+        dist = np.full(line.size, np.nan)
+        unknown = ~known | (mv0 >= tp.n) & (line > tp.line.max())
+        far_share = float(np.mean(unknown))
+        if far_share:
+            notes.append(f"{far_share:.0%} of samples name lines the program does not have")
+    else:
+        raise ValueError("a trace needs positions, or program lines and a feed, to be aligned")
+
+    # Coverage: feed length between the first and last sample's place.
+    lo, hi = float(s.min()), float(s.max())
+    feed_len = np.clip(np.minimum(end_s, hi) - np.maximum(start_s, lo), 0.0, None)
+    coverage = float(feed_len[tp.is_feed].sum() / total_feed) if total_feed else 0.0
+    ok = far_share <= MAX_FAR_SHARE and coverage >= MIN_COVERAGE
+    if trace.pos is not None:
+        msg = (
+            f"{method}: median distance to the path {np.median(dist):.3f} mm, "
+            f"{far_share:.1%} of samples beyond {far:g} mm, coverage {coverage:.0%}"
+        )
+    else:
+        msg = f"{method}: coverage {coverage:.0%}, {far_share:.1%} of samples on unknown lines"
+    if not ok:
+        msg = (
+            "LOW ALIGNMENT QUALITY: "
+            + msg
+            + (" -- a trace of another program, other units or another work offset?")
+        )
+    return Alignment(
+        s=s,
+        v=np.asarray(v, dtype=np.float64),
+        t=trace.t,
+        line=np.asarray(line, dtype=np.int64),
+        method=method,
+        offset=off,
+        distance=dist,
+        coverage=coverage,
+        far_share=far_share,
+        ok=ok,
+        message=msg,
+        notes=tuple(notes),
+    )
