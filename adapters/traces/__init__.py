@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import os
 import re
-from datetime import UTC, datetime, timezone
+from datetime import UTC, datetime
 from pathlib import Path
 
 import numpy as np
