@@ -7,6 +7,7 @@ context (source, line, block text) as attributes and formats it in ``str()`` as
 
 from __future__ import annotations
 
+from collections import defaultdict
 from dataclasses import dataclass
 
 #: Longest block text quoted in a message; a 50 MB line must not end up on the terminal.
@@ -104,3 +105,24 @@ class Notice:
         where = f"{self.source}:{self.line}:" if self.line is not None else f"{self.source}:"
         more = f" ({self.count} lines)" if self.count > 1 else ""
         return f"{where} warning: {self.message}{more}"
+
+
+class Notes:
+    """Collects warnings for one source: one :class:`Notice` per message, with the first
+    line it happened on and a count."""
+
+    def __init__(self, source: str) -> None:
+        self.source = source
+        self._first: dict[str, int | None] = {}
+        self._count: dict[str, int] = defaultdict(int)
+
+    def add(self, message: str, line: int | None = None, count: int = 1) -> None:
+        """``line`` is 0-based (or None for the whole file)."""
+        if message not in self._first:
+            self._first[message] = None if line is None else line + 1
+        self._count[message] += count
+
+    def notices(self) -> tuple[Notice, ...]:
+        return tuple(
+            Notice(self.source, ln, msg, self._count[msg]) for msg, ln in self._first.items()
+        )

@@ -9,7 +9,6 @@ Nothing loops over moves in Python.
 from __future__ import annotations
 
 import dataclasses
-from collections import defaultdict
 from pathlib import Path
 
 import numpy as np
@@ -18,7 +17,7 @@ from numpy.typing import NDArray
 from adapters.gcode import words as W
 from adapters.gcode.lexer import Source, Words
 from core import geometry as g
-from core.errors import InputError, Notice
+from core.errors import InputError, Notes
 from core.tolerances import TOL
 from core.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
 
@@ -27,26 +26,6 @@ AXIS_LETTERS = "XYZ"
 CENTRE_LETTERS = "IJK"
 ALLOWED = set("GMXYZIJKRFPQNSTHDO")
 EXTRA_AXES = set("ABCUVW")
-
-
-class Notes:
-    """Collects warnings: one notice per message, with its first line and a count."""
-
-    def __init__(self, source: str) -> None:
-        self.source = source
-        self._first: dict[str, int | None] = {}
-        self._count: dict[str, int] = defaultdict(int)
-
-    def add(self, message: str, line: int | None = None, count: int = 1) -> None:
-        """``line`` is 0-based (or None for the whole file)."""
-        if message not in self._first:
-            self._first[message] = None if line is None else line + 1
-        self._count[message] += count
-
-    def notices(self) -> tuple[Notice, ...]:
-        return tuple(
-            Notice(self.source, ln, msg, self._count[msg]) for msg, ln in self._first.items()
-        )
 
 
 def detect_dialect(path: str, words: Words) -> str:
