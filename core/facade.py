@@ -11,6 +11,7 @@ from dataclasses import dataclass
 import pluggy
 
 from core.annotations import Annotations, build_annotations
+from core.effects import Effect
 from core.errors import UsageError
 from core.indicators import Evaluation, Indicator, combine
 from core.machine import Machine
@@ -108,6 +109,19 @@ class Ncperf:
         if not isinstance(tr, Trace):
             raise TypeError(f"ncperf_read_trace returned {type(tr).__name__}, not Trace")
         return tr
+
+    # effects
+    def effects(self) -> dict[str, Effect]:
+        """Every registered effect by name, in registration order."""
+        out: dict[str, Effect] = {}
+        for result in reversed(self.pm.hook.ncperf_effects()):
+            for eff in result:
+                if not isinstance(eff, Effect):
+                    raise TypeError(f"ncperf_effects returned {type(eff).__name__}, not Effect")
+                if eff.name in out:
+                    raise ValueError(f"two plugins define the effect {eff.name!r}")
+                out[eff.name] = eff
+        return out
 
     # command line
     def add_commands(self, subparsers: argparse._SubParsersAction) -> None:

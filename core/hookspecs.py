@@ -18,6 +18,7 @@ import pluggy
 
 if TYPE_CHECKING:
     from core.annotations import Annotations
+    from core.effects import Effect
     from core.indicators import Indicator
     from core.machine import Machine
     from core.toolpath import ExtractOptions, ToolPath
@@ -98,4 +99,14 @@ def ncperf_read_trace(source: object, options: TraceOptions) -> Trace | None:
     :param source: a file path or a host object.
     :param options: units and kind (setpoint or actual) the user gave, if any.
     :returns: the trace (mm, s), or None.
+    """
+
+
+@hookspec
+def ncperf_effects() -> list[Effect]:
+    """Unmodelled effects this plugin knows (``ncperf diagnose``, ``[effects.NAME]``).
+
+    Every plugin is called; the effects' names must be unique.
+
+    :returns: a list of :class:`~core.effects.Effect`.
     """

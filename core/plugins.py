@@ -29,6 +29,22 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "plugins.ncu_capacity",
     "plugins.exact_stop",
     "plugins.feed_limit",
+    *(
+        f"plugins.effects.{name}"
+        for name in (
+            "acceleration_ramps",
+            "lookahead_depth",
+            "block_cycle_time",
+            "corner_tolerance",
+            "normal_acceleration_factor",
+            "arc_feed_limit",
+            "axis_dynamics",
+            "feed_override",
+            "servo_lag",
+            "jerk_filter",
+            "path_compression",
+        )
+    ),
 )
 
 DISABLE_ENV = "NCPERF_DISABLE_PLUGINS"

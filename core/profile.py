@@ -288,6 +288,17 @@ def _passes(b: NDArray, length: NDArray, a_up: NDArray, a_dn: NDArray) -> NDArra
     return np.sqrt(np.maximum(np.minimum(np.minimum(fwd, bwd), b2), 0.0))
 
 
+def _window_caps(b: NDArray, length: NDArray, a_dn: NDArray, lookahead: int | None) -> NDArray:
+    """Boundary caps of a planner that sees ``lookahead`` blocks: from every boundary it must
+    be able to stop by the end of the blocks it sees."""
+    n = length.size
+    if lookahead is None or lookahead >= n:
+        return b
+    w_dn = np.concatenate([[0.0], np.cumsum(2.0 * a_dn * length)])
+    ahead = np.minimum(np.arange(n + 1) + int(lookahead), n)
+    return np.minimum(b, np.sqrt(np.maximum(w_dn[ahead] - w_dn, 0.0)))
+
+
 def _moves(v: NDArray, length: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray):
     """Entry, peak, exit speed and time of every move from its boundary speeds."""
     v0, v1 = v[:-1], v[1:]
@@ -341,8 +352,14 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray]:
     return phase, dv
 
 
-def build_profile(ev: Evaluation, *, rounds: int = JERK_ROUNDS) -> Profile:
-    """The predicted feed profile of an evaluated tool path (see the module docstring)."""
+def build_profile(
+    ev: Evaluation, *, rounds: int = JERK_ROUNDS, lookahead: int | None = None
+) -> Profile:
+    """The predicted feed profile of an evaluated tool path (see the module docstring).
+
+    ``lookahead``: plan only that many blocks ahead -- the speed at every boundary must let
+    the machine stop at the end of the blocks it sees (None: the whole program).
+    """
     tp = ev.toolpath
     m = ev.machine
     cap = ev.element_feed.copy()
@@ -354,7 +371,7 @@ def build_profile(ev: Evaluation, *, rounds: int = JERK_ROUNDS) -> Profile:
     length = tp.length
     a_up, a_dn = acc.copy(), acc.copy()
     for r in range(max(rounds, 1)):
-        v = _passes(b, length, a_up, a_dn)
+        v = _passes(_window_caps(b, length, a_dn, lookahead), length, a_up, a_dn)
         v0, peak, v1, time, d_cr = _moves(v, length, cap, a_up, a_dn)
         if r == rounds - 1 or not np.isfinite(jerk).any():
             break
@@ -369,7 +386,7 @@ def build_profile(ev: Evaluation, *, rounds: int = JERK_ROUNDS) -> Profile:
             )
         a_up, a_dn = new_up, new_dn
         if change < JERK_CONVERGED:
-            v = _passes(b, length, a_up, a_dn)
+            v = _passes(_window_caps(b, length, a_dn, lookahead), length, a_up, a_dn)
             v0, peak, v1, time, d_cr = _moves(v, length, cap, a_up, a_dn)
             break
     return Profile(

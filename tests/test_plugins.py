@@ -178,8 +178,11 @@ def test_every_hook_has_a_test_plugin_implementation():
 def test_every_hook_is_documented_and_tested(hook):
     """Each hook has a documentation entry and is called in at least one test."""
     assert f"`{hook}(" in (ROOT / "docs" / "plugins.md").read_text()
-    spec_doc = getattr(hookspecs, hook).__doc__
-    assert ":param" in spec_doc and ":returns:" in spec_doc
+    spec = getattr(hookspecs, hook)
+    spec_doc = spec.__doc__
+    assert ":returns:" in spec_doc
+    for name in inspect.signature(spec).parameters:
+        assert f":param {name}:" in spec_doc
     tests = "".join(p.read_text() for p in (ROOT / "tests").glob("test_*.py"))
     method = {
         "ncperf_extract": "extract(",
@@ -187,6 +190,7 @@ def test_every_hook_is_documented_and_tested(hook):
         "ncperf_display": "display(",
         "ncperf_add_commands": "add_commands(",
         "ncperf_read_trace": "read_trace(",
+        "ncperf_effects": "effects(",
     }[hook]
     assert f"nc.{method}" in tests
 

@@ -88,3 +88,18 @@ def ncperf_read_trace(source, options):
     from core.trace import Trace
 
     return Trace(t=source.t, pos=None, v=source.v, line=source.line, source="sample trace")
+
+
+@hookimpl
+def ncperf_effects():
+    """A third-party effect: a spindle-load slowdown that scales every feed by ``share``."""
+    from core.effects import Effect, Param
+
+    return [
+        Effect(
+            name="sample_spindle_load",
+            params=(Param("share", 0.5, 1.0, 1.0),),
+            apply=lambda setup, p: setup.replace(feed_scale=setup.feed_scale * p["share"]),
+            doc="a sample effect",
+        )
+    ]

@@ -1,0 +1,169 @@
+"""Unmodelled effects: what a real controller does that the paper's models do not.
+
+An :class:`Effect` has a name, parameters with bounds, and a function saying how it changes
+the prediction: it takes a :class:`Setup` -- the machine and the few switches the prediction
+is built from -- and returns a changed one. Effects are plugins (``ncperf_effects``); a
+machine file switches them on with ``[effects.NAME]`` tables, and ``ncperf diagnose`` fits
+their parameters to a measured trace.
+
+The prediction built from a Setup (:func:`core.predict.predict`):
+
+1. the tool path, with the programmed feeds scaled by ``feed_scale`` and, where
+   ``tolerance`` is set, every block's path tolerance replaced;
+2. the A2 evaluation on ``machine`` (whose limits, block time, TIT and normal-acceleration
+   share effects may have changed), plus ``element_caps`` (extra block limits), minus the
+   limits inside runs a path compressor merges (``compression``);
+3. with ``ramps``, the feed profile (:mod:`core.profile`) with a look-ahead of
+   ``lookahead`` blocks, else the paper's point model (each block at its own feed);
+4. time-domain filters on the predicted motion, for traces of actual positions
+   (``servo_tau``: first-order lag; ``filter_window``: moving average).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+
+import numpy as np
+from numpy.typing import NDArray
+
+from core.errors import MachineError, UsageError
+from core.machine import Machine
+from core.toolpath import ToolPath
+
+
+@dataclass(frozen=True)
+class Param:
+    """A parameter of an effect.
+
+    Attributes
+    ----------
+    name : str
+    low, high : float
+        Bounds (in the unit below).
+    default : float or callable
+        Value that changes nothing, or a function of the machine giving it (e.g. the
+        machine's own TIT).
+    unit : str
+    log : bool
+        Search in log space (scale-like parameters spanning decades).
+    integer : bool
+    """
+
+    name: str
+    low: float
+    high: float
+    default: float | Callable[[Machine], float]
+    unit: str = ""
+    log: bool = False
+    integer: bool = False
+
+    def default_for(self, machine: Machine) -> float:
+        d = self.default
+        return float(d(machine)) if callable(d) else float(d)
+
+
+@dataclass(frozen=True)
+class Setup:
+    """What a prediction is built from (see the module docstring).
+
+    Attributes
+    ----------
+    machine : Machine
+    ramps : bool
+        False: the paper's point model; True: the full feed profile.
+    feed_scale : float
+    tolerance : float or None, mm
+    lookahead : int or None, blocks
+    element_caps : tuple of callables (ToolPath, Machine) -> (n,) mm/s
+        Extra per-block feed limits (inf where none).
+    compression : tuple (max_angle rad, max_length mm) or None
+    servo_tau, filter_window : float, s
+    """
+
+    machine: Machine
+    ramps: bool = True
+    feed_scale: float = 1.0
+    tolerance: float | None = None
+    lookahead: int | None = None
+    element_caps: tuple[Callable[[ToolPath, Machine], NDArray[np.float64]], ...] = ()
+    compression: tuple[float, float] | None = None
+    servo_tau: float = 0.0
+    filter_window: float = 0.0
+
+    def replace(self, **changes: object) -> Setup:
+        return dataclasses.replace(self, **changes)
+
+
+@dataclass(frozen=True)
+class Effect:
+    """An unmodelled effect (see the module docstring).
+
+    Attributes
+    ----------
+    name : str
+    params : tuple of Param
+    apply : callable (Setup, {name: value}) -> Setup
+        How the effect changes the prediction.
+    doc : str
+        One line: what the controller does.
+    """
+
+    name: str
+    params: tuple[Param, ...]
+    apply: Callable[[Setup, Mapping[str, float]], Setup] = field(repr=False)
+    doc: str = ""
+
+    def defaults(self, machine: Machine) -> dict[str, float]:
+        return {p.name: p.default_for(machine) for p in self.params}
+
+    def check(self, values: Mapping[str, float], *, where: str = "") -> dict[str, float]:
+        """Complete and bound-check parameter values; errors name the effect and parameter."""
+        known = {p.name: p for p in self.params}
+        out = {}
+        for key, value in values.items():
+            if key not in known:
+                names = ", ".join(known) or "none"
+                raise UsageError(
+                    f"{where}effect {self.name} has no parameter '{key}' (parameters: {names})"
+                )
+            p = known[key]
+            if not (p.low <= float(value) <= p.high):
+                raise UsageError(
+                    f"{where}{self.name}.{key} = {value:g} is outside "
+                    f"[{p.low:g}, {p.high:g}] {p.unit}".rstrip()
+                )
+            out[key] = float(round(value)) if p.integer else float(value)
+        return out
+
+
+def setup_for(machine: Machine, effects: Mapping[str, Effect], *, ramps: bool = True) -> Setup:
+    """The Setup of a machine with the effects its file switches on."""
+    setup = Setup(machine=machine, ramps=ramps)
+    for name, params, line in machine.effects:
+        if name not in effects:
+            raise MachineError(
+                f"unknown effect '{name}' (effects: {', '.join(sorted(effects))})",
+                source=machine.source,
+                line=line,
+            )
+        eff = effects[name]
+        try:
+            vals = eff.defaults(machine) | eff.check(params)
+        except UsageError as exc:
+            raise MachineError(exc.message, source=machine.source, line=line) from None
+        setup = eff.apply(setup, vals)
+    return setup
+
+
+def scale_machine(
+    machine: Machine, *, accel: float = 1.0, jerk: float = 1.0, feed: float = 1.0
+) -> Machine:
+    """The machine with its axis limits scaled."""
+    return dataclasses.replace(
+        machine,
+        max_acceleration=machine.max_acceleration * accel,
+        max_jerk=machine.max_jerk * jerk,
+        max_feed=machine.max_feed * feed,
+    )

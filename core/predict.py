@@ -1,0 +1,214 @@
+"""A prediction built from a :class:`~core.effects.Setup`: the paper's models, the effects
+switched on, and (with ramps) the feed profile -- as a speed over arc length and over time,
+for comparison with measured traces (see :mod:`core.effects` for the steps)."""
+
+from __future__ import annotations
+
+import dataclasses
+from dataclasses import dataclass
+from functools import cached_property
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from core.effects import Setup
+from core.facade import Ncperf
+from core.indicators import Evaluation, Indicator, combine
+from core.profile import Profile, build_profile
+from core.toolpath import ToolPath
+
+#: Time step of the predicted signal when time-domain effects are on (s); longer programs
+#: get a coarser step so that the signal stays under MAX_SAMPLES.
+SIGNAL_DT = 0.001
+MAX_SAMPLES = 400_000
+
+
+@dataclass(frozen=True, eq=False)
+class Prediction:
+    """Predicted speed along the path.
+
+    Attributes
+    ----------
+    setup : Setup
+    evaluation : Evaluation
+    profile : Profile or None
+        None for the paper's point model (no ramps).
+    """
+
+    setup: Setup
+    evaluation: Evaluation
+    profile: Profile | None
+
+    @property
+    def toolpath(self) -> ToolPath:
+        return self.evaluation.toolpath
+
+    @cached_property
+    def _start_s(self) -> NDArray[np.float64]:
+        return np.concatenate([[0.0], np.cumsum(self.toolpath.length)[:-1]])
+
+    @cached_property
+    def block_speed(self) -> NDArray[np.float64]:
+        """(n,) each block's own predicted feed; rapids at the axes' max feed."""
+        tp = self.toolpath
+        v = self.evaluation.element_feed.copy()
+        rapid = ~tp.is_feed
+        if rapid.any():
+            v[rapid] = self.setup.machine.rapid_speed(tp.tangent_start[rapid])
+        return v
+
+    def _raw_speed_at(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
+        if self.profile is not None:
+            return self.profile.speed_at(s)
+        k = np.clip(np.searchsorted(self._start_s, s, side="right") - 1, 0, self.toolpath.n - 1)
+        return self.block_speed[k]
+
+    @cached_property
+    def _filtered(self) -> tuple[NDArray, NDArray, NDArray] | None:
+        """(t, s, v) of the motion after the time-domain effects, or None without them."""
+        su = self.setup
+        if su.servo_tau <= 0 and su.filter_window <= 0:
+            return None
+        t, s, v = self.signal(raw=True)
+        dt = t[1] - t[0] if t.size > 1 else SIGNAL_DT
+        # Rest before and after, long enough for the filters' tails to carry the distance.
+        head = int(np.ceil(0.5 * su.filter_window / dt)) + 1
+        tail = head + int(np.ceil(8.0 * su.servo_tau / dt)) + 1
+        v = np.concatenate([np.zeros(head), v, np.zeros(tail)])
+        t = (np.arange(v.size) - head) * dt + t[0]
+        if su.filter_window > 0:
+            # Setpoint smoothing: a centred moving average of the speed over the window.
+            k = max(int(round(su.filter_window / dt)), 1)
+            if k > 1:
+                v = np.convolve(v, np.ones(k) / k, mode="same")
+        if su.servo_tau > 0:
+            # First-order lag of the positions: the actual speed follows v through
+            # dv_act/dt = (v - v_act) / tau (exact discretisation per step).
+            a = np.exp(-dt / su.servo_tau)
+            v = _first_order(v, a)
+        s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)])
+        return t, s, v
+
+    def signal(self, *, raw: bool = False) -> tuple[NDArray, NDArray, NDArray]:
+        """(t, s, v) of the predicted motion sampled in time (s, mm, mm/s)."""
+        if not raw and self._filtered is not None:
+            return self._filtered
+        tp = self.toolpath
+        if self.profile is not None:
+            dt = max(SIGNAL_DT, self.profile.cycle_time / MAX_SAMPLES)
+            smp = self.profile.sample(dt)
+            return smp.t, smp.s, smp.v
+        # The paper's point model as motion: each block at its own speed.
+        v = self.block_speed
+        dur = tp.length / v
+        t_edges = np.concatenate([[0.0], np.cumsum(dur)])
+        dt = max(SIGNAL_DT, float(t_edges[-1]) / MAX_SAMPLES)
+        t = np.arange(0.0, t_edges[-1], dt)
+        k = np.clip(np.searchsorted(t_edges, t, side="right") - 1, 0, tp.n - 1)
+        s = self._start_s[k] + (t - t_edges[k]) * v[k]
+        return t, s, v[k]
+
+    def speed_at(self, s: ArrayLike) -> NDArray[np.float64]:
+        """Predicted speed (mm/s) at arc lengths ``s`` (mm)."""
+        s = np.asarray(s, dtype=np.float64)
+        f = self._filtered
+        if f is None:
+            return self._raw_speed_at(s)
+        _, ss, vv = f
+        keep = np.concatenate([[True], np.diff(ss) > 1e-12])
+        return np.interp(s, ss[keep], vv[keep])
+
+    @cached_property
+    def cycle_time(self) -> float:
+        """Predicted time (s): the profile's, or the point model's blocks plus dwells."""
+        if self.profile is not None:
+            return self.profile.cycle_time
+        tp = self.toolpath
+        return float(np.sum(tp.length / self.block_speed) + tp.dwell.sum())
+
+
+def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:
+    """y[k] = a y[k-1] + (1 - a) v[k], y[0] = v[0], vectorised in blocks of a few thousand."""
+    if a < 1e-6 or v.size == 0:
+        return v.copy()
+    out = np.empty_like(v)
+    y = float(v[0])
+    n = v.size
+    # a^-block must stay far from overflow: a^-block < e^25.
+    block = int(max(1, min(2048, 25.0 / -np.log(a))))
+    powers = a ** np.arange(1, block + 1)
+    for c in range(0, n, block):
+        x = v[c : c + block]
+        m = x.size
+        p = powers[:m]
+        # y_k = a^k y0 + (1 - a) sum_{i<=k} a^(k-i) x_i
+        w = (1.0 - a) * x / (a ** np.arange(1, m + 1))
+        out[c : c + m] = p * (y + np.cumsum(w))
+        y = float(out[c + m - 1])
+    return out
+
+
+def compression_runs(tp: ToolPath, max_angle: float, max_length: float) -> NDArray[np.bool_]:
+    """(n - 1,) junctions inside runs a compressor merges: both blocks shorter than
+    ``max_length`` (mm), feed moves of one operation, turning by less than ``max_angle`` (rad)."""
+    if tp.n < 2:
+        return np.zeros(0, dtype=bool)
+    short = tp.is_feed & (tp.length < max_length)
+    inside = np.zeros(tp.n - 1, dtype=bool)
+    inside[tp.junctions] = True
+    return inside & short[:-1] & short[1:] & (tp.turn_angle < max_angle)
+
+
+def predict(nc: Ncperf, tp: ToolPath, setup: Setup) -> Prediction:
+    """The prediction of ``setup`` on ``tp`` (see :mod:`core.effects` for the steps)."""
+    changes = {}
+    if setup.feed_scale != 1.0:
+        changes["feed"] = tp.feed * setup.feed_scale
+    if setup.tolerance is not None:
+        changes["tolerance"] = np.full(tp.n, float(setup.tolerance))
+    tp2 = dataclasses.replace(tp, **changes) if changes else tp
+    m = setup.machine
+    indicators = nc.indicators(tp2, m)
+    for fn in setup.element_caps:
+        cap = np.asarray(fn(tp2, m), dtype=np.float64)
+        idx = np.flatnonzero(tp2.is_feed & np.isfinite(cap))
+        name = getattr(fn, "indicator", "effect")
+        label = getattr(fn, "label", "effect limit")
+        indicators.append(
+            Indicator(
+                name=name,
+                at="element",
+                index=idx,
+                feed=cap[idx],
+                limit=np.zeros(idx.size, dtype=np.int64),
+                labels=(label,),
+            )
+        )
+    if setup.compression is not None:
+        merged = compression_runs(tp2, *setup.compression)
+        # Blocks strictly inside a merged run (both their junctions merged) lose their
+        # block-time cap; merged junctions lose their limits.
+        blocks = np.zeros(tp2.n, dtype=bool)
+        blocks[1:-1] = merged[:-1] & merged[1:]
+        kept = []
+        for ind in indicators:
+            if ind.at == "junction":
+                keep = ~merged[ind.index]
+            else:
+                keep = ~(blocks[ind.index] & (ind.name == "ncu_capacity"))
+            if keep.all():
+                kept.append(ind)
+                continue
+            kept.append(
+                dataclasses.replace(
+                    ind,
+                    index=ind.index[keep],
+                    feed=ind.feed[keep],
+                    limit=ind.limit[keep],
+                    values={k: np.asarray(v)[keep] for k, v in ind.values.items()},
+                )
+            )
+        indicators = kept
+    ev = combine(tp2, m, indicators)
+    profile = build_profile(ev, lookahead=setup.lookahead) if setup.ramps else None
+    return Prediction(setup=setup, evaluation=ev, profile=profile)

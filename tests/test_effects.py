@@ -1,0 +1,198 @@
+"""Unmodelled effects (issue 5): each changes the prediction as its docstring says, with
+numbers worked out by hand; machine files switch them on."""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+import pytest
+
+from core import MachineError, UsageError
+from core.effects import Setup, setup_for
+from core.machine import machine_from_toml_text
+from core.predict import predict
+from tests.conftest import machine, path
+
+INF = float("inf")
+NAMES = [
+    "acceleration_ramps",
+    "lookahead_depth",
+    "block_cycle_time",
+    "corner_tolerance",
+    "normal_acceleration_factor",
+    "arc_feed_limit",
+    "axis_dynamics",
+    "feed_override",
+    "servo_lag",
+    "jerk_filter",
+    "path_compression",
+]
+
+
+@pytest.fixture
+def effects(nc):
+    return nc.effects()
+
+
+def run(nc, effects, tp, m, name=None, ramps=True, **params):
+    setup = Setup(machine=m, ramps=ramps)
+    if name:
+        eff = effects[name]
+        setup = eff.apply(setup, eff.defaults(m) | eff.check(params))
+    return predict(nc, tp, setup)
+
+
+def test_the_built_in_effects(nc):
+    """The issue's eleven effects are registered, by these names."""
+    assert list(nc.effects()) == NAMES
+
+
+def test_acceleration_ramps_turn_the_point_model_into_the_profile(nc, effects):
+    """Without ramps a 100 mm line runs at F all along (1 s); with them 1 + F/A = 1.04 s."""
+    tp = path([{"end": (100, 0, 0)}])
+    m = machine(jerk=(INF, INF, INF))
+    assert run(nc, effects, tp, m, ramps=False).cycle_time == pytest.approx(1.0)
+    p = run(nc, effects, tp, m, "acceleration_ramps", ramps=False)
+    assert p.cycle_time == pytest.approx(1.04)
+
+
+def test_feed_override(nc, effects):
+    """Scale 0.8: 100 mm at 80 mm/s plus one ramp 80 / 2500: 1.25 + 0.032 = 1.282 s."""
+    tp = path([{"end": (100, 0, 0)}])
+    p = run(nc, effects, tp, machine(jerk=(INF, INF, INF)), "feed_override", scale=0.8)
+    assert p.cycle_time == pytest.approx(1.282)
+
+
+def test_block_cycle_time(nc, effects):
+    """t_block 24 ms on 1 mm blocks: 1 / 0.024 = 41.667 mm/s (t_int 12 ms gives 83.333)."""
+    tp = path([{"end": (i + 1, 0, 0)} for i in range(10)], feed=10000 / 60)
+    p = run(nc, effects, tp, machine(), "block_cycle_time", t_block=0.024)
+    assert np.allclose(p.evaluation.element_feed, 1 / 0.024)
+
+
+def test_corner_tolerance(nc, effects):
+    """TIT 0.1 mm at 90 deg: R = 0.1 x 2.414214 = 0.241421 mm, sqrt(2500 R) = 24.567 mm/s."""
+    tp = path([{"end": (10, 0, 0)}, {"end": (10, 10, 0)}])
+    p = run(nc, effects, tp, machine(jerk=(INF, INF, INF)), "corner_tolerance", tolerance=0.1)
+    assert p.evaluation.junction_feed[0] == pytest.approx(math.sqrt(2500 * 0.2414213562))
+
+
+def test_normal_acceleration_factor(nc, effects):
+    """Factor 0.5 at a 90 deg corner: sqrt(0.5 x 2500 x 0.0241421) = 5.4934 mm/s."""
+    tp = path([{"end": (10, 0, 0)}, {"end": (10, 10, 0)}])
+    p = run(
+        nc, effects, tp, machine(jerk=(INF, INF, INF)), "normal_acceleration_factor", factor=0.5
+    )
+    assert p.evaluation.junction_feed[0] == pytest.approx(math.sqrt(0.5 * 2500 * 0.0241421356))
+
+
+def test_arc_feed_limit(nc, effects):
+    """A quarter arc of R 5 in XY at F 200: both axes reach the full normal over it, so the
+    arc is capped at sqrt(2500 x 5) = 111.80 mm/s; with factor 0.5 at sqrt(1250 x 5)."""
+    tp = path([{"end": (5, 5, 0), "center": (0, 5, 0), "ccw": True}], feed=200.0)
+    m = machine(jerk=(INF, INF, INF))
+    p = run(nc, effects, tp, m, "arc_feed_limit")
+    assert p.evaluation.element_feed[0] == pytest.approx(math.sqrt(2500 * 5))
+    assert p.evaluation.indicator_names[p.evaluation.element_indicator[0]] == "arc_feed_limit"
+    both = effects["normal_acceleration_factor"].apply(Setup(machine=m), {"factor": 0.5})
+    both = effects["arc_feed_limit"].apply(both, {})
+    assert predict(nc, tp, both).evaluation.element_feed[0] == pytest.approx(math.sqrt(6250))
+
+
+def test_axis_dynamics(nc, effects):
+    """Acceleration x 2 on a 100 mm line: 1 + 100 / 5000 = 1.02 s."""
+    tp = path([{"end": (100, 0, 0)}])
+    p = run(nc, effects, tp, machine(jerk=(INF, INF, INF)), "axis_dynamics", accel_scale=2.0)
+    assert p.cycle_time == pytest.approx(1.02)
+
+
+def test_lookahead_depth(nc, effects):
+    """Looking one 0.5 mm block ahead, the machine must stop within it: v^2 <= 2 A 0.5,
+    v <= 50 mm/s at every inner boundary; full look-ahead runs the 20 mm as one triangle
+    peaking at sqrt(A 20) = 223.607 mm/s."""
+    tp = path([{"end": (0.5 * (i + 1), 0, 0)} for i in range(40)], feed=300.0)
+    m = machine(jerk=(INF, INF, INF), t_int=0.0001)
+    p = run(nc, effects, tp, m, "lookahead_depth", blocks=1)
+    assert np.allclose(p.profile.v_entry[1:], 50.0)
+    assert run(nc, effects, tp, m).profile.v_peak.max() == pytest.approx(math.sqrt(50000))
+
+
+def test_servo_lag_and_jerk_filter_delay_the_speed(nc, effects):
+    """Lag and smoothing keep the distance but slow the speed's rise: at 20 ms into a
+    ramp to 100 mm/s (A 2500: raw 50 mm/s) the lagged speed (tau 20 ms) is lower."""
+    tp = path([{"end": (100, 0, 0)}])
+    m = machine(jerk=(INF, INF, INF))
+    raw = run(nc, effects, tp, m)
+    for name, params in (("servo_lag", {"tau": 0.02}), ("jerk_filter", {"window": 0.04})):
+        p = run(nc, effects, tp, m, name, **params)
+        t, s, v = p.signal()
+        assert s[-1] == pytest.approx(100.0, abs=0.05)
+        k = int(round(0.02 / (t[1] - t[0])))
+        assert v[k] < raw.signal()[2][k] - 5
+        # first-order lag of a ramp a t: a (t - tau (1 - exp(-t / tau))) = 18.4 mm/s
+        if name == "servo_lag":
+            assert v[k] == pytest.approx(2500 * (0.02 - 0.02 * (1 - math.exp(-1))), abs=0.8)
+
+
+def test_path_compression_lifts_the_block_cap_inside_runs(nc, effects):
+    """20 collinear 1 mm blocks at 10 m/min (capped at 83.333 mm/s by t_int 12 ms):
+    compressed (blocks < 3 mm, angles < 5 deg), the 18 inner blocks keep F; the ends stay capped."""
+    tp = path([{"end": (i + 1, 0, 0)} for i in range(20)], feed=10000 / 60)
+    p = run(nc, effects, tp, machine(), "path_compression", max_angle=5.0, max_length=3.0)
+    ef = p.evaluation.element_feed
+    assert np.allclose(ef[1:-1], 10000 / 60)
+    assert ef[0] == pytest.approx(1 / 0.012) and ef[-1] == pytest.approx(1 / 0.012)
+
+
+def test_parameters_are_bound_checked(effects):
+    """Out-of-bounds or unknown parameters: a usage error naming effect and parameter."""
+    with pytest.raises(UsageError, match=r"servo_lag.tau = 0.5 is outside \[0, 0.2\] s"):
+        effects["servo_lag"].check({"tau": 0.5})
+    with pytest.raises(UsageError, match="has no parameter 'tua'"):
+        effects["servo_lag"].check({"tua": 0.1})
+
+
+MACHINE = """name = "m"
+[axes.X]
+max_feed = 30.0
+max_acceleration = 2.5
+max_jerk = 5.0
+[axes.Y]
+max_feed = 30.0
+max_acceleration = 2.5
+max_jerk = 5.0
+[axes.Z]
+max_feed = 30.0
+max_acceleration = 2.5
+max_jerk = 5.0
+[controller]
+interpolation_time = 0.012
+path_tolerance = 0.01
+curvature_transition_time = 0.012
+"""
+
+
+def test_machine_file_switches_effects_on(nc, effects):
+    """[effects.NAME] tables become part of the model: feed_override 0.5 halves the feed."""
+    m = machine_from_toml_text(MACHINE + "[effects.feed_override]\nscale = 0.5\n", "m.toml")
+    setup = setup_for(m, effects)
+    assert setup.feed_scale == 0.5
+    tp = path([{"end": (100, 0, 0)}])
+    assert predict(nc, tp, setup).evaluation.element_feed[0] == pytest.approx(50.0)
+
+
+@pytest.mark.parametrize(
+    "table,line,message",
+    [
+        ("[effects.servo_lagg]\ntau = 0.01\n", 18, "unknown effect 'servo_lagg'"),
+        ("[effects.servo_lag]\ntau = 0.5\n", 18, "servo_lag.tau = 0.5 is outside"),
+        ('[effects.servo_lag]\ntau = "x"\n', 19, "must be a finite number"),
+    ],
+    ids=["unknown", "bounds", "not a number"],
+)
+def test_machine_file_effect_errors(effects, table, line, message):
+    """Bad effect tables in a machine file: file, line and what is wrong."""
+    with pytest.raises(MachineError) as info:
+        setup_for(machine_from_toml_text(MACHINE + table, "m.toml"), effects)
+    assert str(info.value).startswith(f"m.toml:{line}:") and message in str(info.value)
