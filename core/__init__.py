@@ -8,6 +8,7 @@ from __future__ import annotations
 from core.annotations import (
     Annotations,
     ComparisonTarget,
+    DiagnosisTarget,
     FileTarget,
     Zone,
     build_annotations,
@@ -29,6 +30,7 @@ __all__ = [
     "Analysis",
     "Annotations",
     "ComparisonTarget",
+    "DiagnosisTarget",
     "Evaluation",
     "ExtractOptions",
     "FileTarget",

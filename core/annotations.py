@@ -78,6 +78,28 @@ class ComparisonTarget:
             raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
 
 
+@dataclass(frozen=True, eq=False)
+class DiagnosisTarget:
+    """A file to draw a diagnosis into: the path coloured by gap, the gap zones, and measured
+    against predicted feed over arc length for the worst of them (``ncperf diagnose``).
+
+    Attributes
+    ----------
+    path : str
+    diagnosis : core.diagnose.Diagnosis
+    view : {"xy", "xz", "yz", "iso"}
+    """
+
+    path: str
+    diagnosis: object
+    view: str = "xy"
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "path", os.fspath(self.path))
+        if self.view not in VIEWS:
+            raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
+
+
 @dataclass(frozen=True)
 class Zone:
     """A stretch of the path the predicted profile keeps below 90 % of the programmed feed

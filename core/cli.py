@@ -17,7 +17,7 @@ from core.annotations import VIEWS, ComparisonTarget, FileTarget
 from core.compare import ranked
 from core.compare import row as compare_row
 from core.compare import table as compare_table
-from core.errors import NcperfError, UsageError
+from core.errors import InputError, NcperfError, UsageError
 from core.facade import Ncperf
 from core.machine import DEFAULT_PRESET, load_preset, preset_names, resolve_machine
 from core.output import atomic_writer
@@ -71,6 +71,39 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     _common(c)
     c.add_argument("--svg", metavar="OUT", help="the programs side by side, one colour scale")
     c.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
+
+    d = sub.add_parser(
+        "diagnose",
+        help="where and why a measured trace differs from the "
+        "prediction, and which unmodelled effect explains it",
+    )
+    d.set_defaults(run=cmd_diagnose)
+    d.add_argument("program", help="tool path file (G-code or CL data)")
+    d.add_argument(
+        "traces",
+        nargs="+",
+        metavar="TRACE",
+        help="measured traces (CSV t,x,y,z[,v][,line]; MTConnect SHDR)",
+    )
+    _common(d)
+    d.add_argument(
+        "--baseline",
+        choices=("paper", "profile"),
+        default="profile",
+        help="the paper's point model or the full feed profile (default)",
+    )
+    d.add_argument(
+        "--effects", metavar="A,B,...", help="only these effects (default: every registered effect)"
+    )
+    d.add_argument("--trace-units", choices=("mm", "inch"), help="trace units (default mm)")
+    d.add_argument(
+        "--trace-kind",
+        choices=("setpoint", "actual"),
+        help="what the trace's positions are (default: from the reader)",
+    )
+    d.add_argument("--json", metavar="OUT", help="write the diagnosis as JSON")
+    d.add_argument("--svg", metavar="OUT", help="the path coloured by gap, and feed plots")
+    d.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
 
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
     m.set_defaults(run=cmd_machines)
@@ -193,6 +226,56 @@ def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
         )
         target = ComparisonTarget(args.svg, items, view=args.view)
         written = nc.display(items[0][1], items[0][2], target)
+        print(f"  svg              {written}")
+    return 0
+
+
+def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
+    from core.align import align
+    from core.diagnose import diagnose, report, to_json
+    from core.effects import setup_for
+    from core.trace import TraceOptions
+
+    for out in (args.json, args.svg):
+        _check_output(out)
+    machine, note = _machine(args)
+    effects = nc.effects()
+    if args.effects:
+        wanted = [e.strip() for e in args.effects.split(",") if e.strip()]
+        unknown = [e for e in wanted if e not in effects]
+        if unknown:
+            raise UsageError(f"unknown effect {', '.join(unknown)} (effects: {', '.join(effects)})")
+        effects = {k: effects[k] for k in wanted}
+    tp = nc.extract(args.program, _options(args))
+    _print_notices(tp.notices, sys.stderr)
+    options = TraceOptions(units=args.trace_units, kind=args.trace_kind)
+    alignments, labels = [], []
+    for path in args.traces:
+        tr = nc.read_trace(path, options)
+        _print_notices(tr.notices, sys.stderr)
+        al = align(tp, tr)
+        if not al.ok:
+            raise InputError(f"{al.message}; no diagnosis", source=path)
+        alignments.append(al)
+        labels.append(Path(path).name)
+    base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
+    d = diagnose(nc, tp, alignments, labels, base, args.baseline, effects)
+    print(
+        report(
+            d, program=tp.source, machine=machine.name + note, labels=labels, effects=nc.effects()
+        )
+    )
+    if args.json:
+        import json
+
+        with atomic_writer(args.json) as fh:
+            json.dump(to_json(d), fh, indent=1)
+            fh.write("\n")
+        print(f"  json             {args.json}")
+    if args.svg:
+        from core.annotations import DiagnosisTarget
+
+        written = nc.display(tp, d.annotations(), DiagnosisTarget(args.svg, d, view=args.view))
         print(f"  svg              {written}")
     return 0
 

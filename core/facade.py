@@ -82,8 +82,16 @@ class Ncperf:
         self, source: object, machine: Machine, options: ExtractOptions | None = None
     ) -> Analysis:
         tp = self.extract(source, options)
-        ev = self.evaluate(tp, machine)
-        profile = build_profile(ev)
+        if machine.effects:
+            # Effects the machine file switches on are part of its model (issue 5).
+            from core.effects import setup_for
+            from core.predict import predict
+
+            pred = predict(self, tp, setup_for(machine, self.effects()))
+            ev, profile = pred.evaluation, pred.profile
+        else:
+            ev = self.evaluate(tp, machine)
+            profile = build_profile(ev)
         return Analysis(tp, ev, profile, build_annotations(ev, profile))
 
     def run(

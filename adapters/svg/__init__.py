@@ -9,8 +9,8 @@ from __future__ import annotations
 
 import os
 
-from adapters.svg.render import render_comparison, render_svg, write_svg
-from core import Annotations, ComparisonTarget, FileTarget, ToolPath, hookimpl
+from adapters.svg.render import render_comparison, render_diagnosis, render_svg, write_svg
+from core import Annotations, ComparisonTarget, DiagnosisTarget, FileTarget, ToolPath, hookimpl
 from core.output import atomic_writer
 
 __all__ = ["ncperf_display", "render_comparison", "render_svg", "svg_target", "write_svg"]
@@ -24,7 +24,7 @@ def svg_target(target: object) -> tuple[str, str] | None:
     target : str, os.PathLike or FileTarget
         A name ending in ``.svg`` (any case); a FileTarget brings its view.
     """
-    if isinstance(target, FileTarget | ComparisonTarget):
+    if isinstance(target, FileTarget | ComparisonTarget | DiagnosisTarget):
         path, view = target.path, target.view
     elif isinstance(target, str | os.PathLike):
         path, view = target, "xy"
@@ -43,8 +43,12 @@ def ncperf_display(toolpath: ToolPath, annotations: Annotations, target: object)
     if found is None:
         return None
     path, view = found
-    if isinstance(target, ComparisonTarget):
-        data = render_comparison(target.panels, view)
+    if isinstance(target, ComparisonTarget | DiagnosisTarget):
+        data = (
+            render_comparison(target.panels, view)
+            if isinstance(target, ComparisonTarget)
+            else render_diagnosis(toolpath, annotations, target.diagnosis, view)
+        )
         with atomic_writer(path, binary=True) as fh:
             fh.write(data)
         return path

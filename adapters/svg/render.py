@@ -1056,6 +1056,195 @@ def render_comparison(
     return b"".join(s)
 
 
+def _feed_plot(
+    x0: float,
+    y0: float,
+    w: float,
+    h: float,
+    title: str,
+    series: Sequence[tuple[NDArray, NDArray, str, str]],
+) -> str:
+    """A small chart of feed (mm/min) over arc length (mm): (s, v, colour, dash) series."""
+    s_all = np.concatenate([s for s, *_ in series])
+    v_all = np.concatenate([v for _, v, *_ in series])
+    s_lo, s_hi = float(s_all.min()), float(s_all.max())
+    v_hi = float(max(v_all.max(), 1e-9)) * 1.08
+    if s_hi <= s_lo:
+        s_hi = s_lo + 1.0
+    out = [
+        f'<g transform="translate({x0:.0f},{y0:.0f})">\n',
+        f'<text x="0" y="-6" font-weight="bold">{escape(title)}</text>\n',
+        f'<rect width="{w:.0f}" height="{h:.0f}" fill="none" stroke="#cccccc"/>\n',
+    ]
+    for s, v, colour, dash in series:
+        xs = (s - s_lo) / (s_hi - s_lo) * w
+        ys = h - v / v_hi * h
+        pts = " ".join(f"{a:.1f},{b:.1f}" for a, b in zip(xs.tolist(), ys.tolist(), strict=True))
+        dash_attr = f' stroke-dasharray="{dash}"' if dash else ""
+        out.append(
+            f'<polyline points="{pts}" fill="none" stroke="{colour}" '
+            f'stroke-width="1.5"{dash_attr}/>\n'
+        )
+    out.append(
+        f'<text x="0" y="{h + 14:.0f}">{s_lo:.1f} mm</text>'
+        f'<text x="{w:.0f}" y="{h + 14:.0f}" text-anchor="end">{s_hi:.1f} mm</text>'
+        f'<text x="-4" y="8" text-anchor="end">{v_hi:.0f}</text>'
+        f'<text x="-4" y="{h:.0f}" text-anchor="end">0</text>\n</g>\n'
+    )
+    return "".join(out)
+
+
+def render_diagnosis(tp: ToolPath, ann: Annotations, diagnosis: object, view: str = "xy") -> bytes:
+    """The path coloured by gap (measured against predicted feed), the gap zones numbered,
+    and measured against predicted feed over arc length for the worst zones.
+
+    ``diagnosis`` is a :class:`core.diagnose.Diagnosis`; ``ann`` its annotations.
+    """
+    d = diagnosis
+    if view not in PROJECTIONS:
+        raise ValueError(f"view must be one of {VIEWS}, got {view!r}")
+    _check(tp, ann)
+    st = strokes(tp, view)
+    rapid = _colour((ann.rapid_colour,), 0)
+    styles = {
+        -1: (
+            f'stroke="{rapid}" stroke-width="{round(RAPID_STROKE_PX * Q)}" '
+            f'stroke-dasharray="{4 * Q} {3 * Q}"',
+            "rapid or not measured",
+        )
+    }
+    for c, lab in enumerate(ann.class_labels):
+        styles[c] = (f'stroke="{_colour(ann.class_colours, c)}"', lab)
+    # Draw the widest gaps on top: order the severities by distance from "within".
+    mid = len(ann.class_labels) // 2
+    sev = np.asarray(ann.move_class, dtype=np.int64)
+    rank = np.where(sev < 0, -1, np.abs(sev - mid))
+    ranked_styles = {-1: styles[-1]}
+    groups = []
+    for r in sorted(set(rank.tolist())):
+        sel_styles = {k: v for k, v in styles.items() if k >= 0 and abs(k - mid) == r}
+        for c, style in sel_styles.items():
+            mask = np.where(sev == c, 0, -1)
+            g, _ = panel(st, tp, mask, {0: style})
+            groups += g
+    g_rapid, _ = panel(st, tp, np.where(sev < 0, -1, -2), ranked_styles)
+    fr = st.frame
+    zones = list(d.zones[:10])
+    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
+    n_plots = min(4, len(zones))
+    plot_w, plot_h = 420.0, 150.0
+    width = 2 * MARGIN + PLOT_W + GAP + 2 * plot_w + 80
+    legend_y = TOP + fr.height + 48.0
+    height = (
+        max(
+            legend_y + ROW * (len(ann.class_labels) + 8),
+            TOP + (plot_h + 50) * ((n_plots + 1) // 2) + 40,
+        )
+        + MARGIN
+    )
+    head = escape(
+        f"{tp.source}: measured against predicted feed ({d.baseline} baseline), "
+        f"{VIEW_NAMES[view]} view"
+    )
+    s: list[bytes] = [
+        (
+            f'<?xml version="1.0" encoding="UTF-8"?>\n'
+            f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{width:.0f}" '
+            f'height="{height:.0f}" viewBox="0 0 {width:.0f} {height:.0f}" '
+            f'font-family="sans-serif" font-size="12">\n<title>ncperf diagnose: {head}</title>\n'
+            f'<rect width="{width:.0f}" height="{height:.0f}" fill="#ffffff"/>\n'
+            f'<text x="{MARGIN:.0f}" y="28" font-size="16" font-weight="bold">{head}</text>\n'
+        ).encode()
+    ]
+    plot_attrs = (
+        f'transform="scale({1 / Q:g})" fill="none" stroke-width="{round(STROKE_PX * Q)}"'
+        f' stroke-linecap="round" stroke-linejoin="round"'
+    )
+    s.append(
+        (
+            f'<g transform="translate({MARGIN:.0f},{TOP:.0f})">\n'
+            f'<text x="0" y="-10" font-size="14" font-weight="bold">Gap along the path '
+            f"(before the chosen effects)</text>\n"
+            f'<rect width="{PLOT_W:.0f}" height="{fr.height:.1f}" fill="none" '
+            f'stroke="#cccccc"/>\n<g {plot_attrs}>\n'
+        ).encode()
+    )
+    s += g_rapid + groups
+    s.append(b"</g>\n")
+    # Numbered gap zones.
+    out = ['<g font-size="13" font-weight="bold">\n']
+    for k, z in enumerate(zones, start=1):
+        mv = int(
+            np.clip(
+                np.searchsorted(start_s, 0.5 * (z.s_start + z.s_end), side="right") - 1, 0, tp.n - 1
+            )
+        )
+        ((x, y),) = fr.to_px(project(0.5 * (tp.start[mv : mv + 1] + tp.end[mv : mv + 1]), view))
+        lines = f"{z.line_start}" if z.line_start == z.line_end else f"{z.line_start}-{z.line_end}"
+        tip = (
+            f"gap zone {k}: lines {lines}, {z.feature}, RMS gap {z.gap_rms:.0f} mm/min, "
+            f"{z.time_s:+.3f} s"
+        )
+        out.append(
+            f"<g><title>{escape(tip)}</title>"
+            f'<circle cx="{_f(x)}" cy="{_f(y)}" r="7" fill="none" stroke="#000000" '
+            f'stroke-width="1.5"/><text x="{_f(x + 8)}" y="{_f(y - 8)}" stroke="#ffffff" '
+            f'stroke-width="3" paint-order="stroke">{k}</text></g>\n'
+        )
+    out.append("</g>\n")
+    s.append("".join(out).encode())
+    s.append(_scale_bar(fr).encode())
+    s.append(b"</g>\n")
+    # Feed plots of the worst zones.
+    px0 = MARGIN + PLOT_W + GAP + 30
+    for k, z in enumerate(zones[:n_plots]):
+        pad = max(2.0, 0.5 * (z.s_end - z.s_start))
+        series = []
+        for dd in d.data:
+            sel = (dd.s >= z.s_start - pad) & (dd.s <= z.s_end + pad)
+            if sel.sum() >= 2:
+                series.append((dd.s[sel], d.before.speed_at(dd.s[sel]) * 60, "#888888", "5 3"))
+                if d.chosen:
+                    series.append((dd.s[sel], d.after.speed_at(dd.s[sel]) * 60, "#2166ac", ""))
+                series.append((dd.s[sel], dd.v[sel] * 60, "#000000", ""))  # on top
+                break
+        if not series:
+            continue
+        lines = f"{z.line_start}" if z.line_start == z.line_end else f"{z.line_start}-{z.line_end}"
+        x = px0 + (k % 2) * (plot_w + 30)
+        y = TOP + (k // 2) * (plot_h + 50)
+        s.append(
+            _feed_plot(
+                x, y, plot_w, plot_h, f"zone {k + 1}: lines {lines} ({z.feature})", series
+            ).encode()
+        )
+    # Legend and verdict.
+    out = ['<g class="legend">\n']
+    yy = legend_y
+    for c, lab in enumerate(ann.class_labels):
+        out.append(_swatch(MARGIN, yy, _colour(ann.class_colours, c), lab))
+        yy += ROW
+    out.append(_swatch(MARGIN, yy, rapid, "rapid, or not in the trace", rapid=True))
+    yy += ROW * 1.5
+    verdict = (
+        f"best effect: {d.best_effect}; chosen: {' + '.join(d.chosen)}; gap "
+        f"{d.gap_rms_before:.0f} -> {d.gap_rms_after:.0f} mm/min (RMS over time)"
+        if d.best_effect
+        else f"no effect removes 20 % of the held-out gap ({d.gap_rms_before:.0f} mm/min): "
+        "the model already explains this trace"
+    )
+    out.append(f'<text x="{MARGIN:.0f}" y="{yy:.0f}" font-weight="bold">{escape(verdict)}</text>\n')
+    yy += ROW
+    out.append(
+        f'<text x="{MARGIN:.0f}" y="{yy:.0f}">plots: measured (black), predicted '
+        f"before (grey, dashed) and with the chosen effects (blue), feed in mm/min over "
+        f"arc length</text>\n</g>\n"
+    )
+    s.append("".join(out).encode())
+    s.append(b"</svg>\n")
+    return b"".join(s)
+
+
 def write_svg(
     tp: ToolPath, ann: Annotations, path: str | os.PathLike[str], view: str = "xy"
 ) -> str:

@@ -12,7 +12,7 @@ from core.effects import Effect, Param
 
 EFFECT = Effect(
     name="lookahead_depth",
-    params=(Param("blocks", 1, 1000, 1000, unit="blocks", log=True, integer=True),),
+    params=(Param("blocks", 1, 1000, 1000, log=True, integer=True),),
     apply=lambda setup, p: setup.replace(lookahead=int(round(p["blocks"]))),
     doc="planning only N blocks ahead",
 )

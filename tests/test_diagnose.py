@@ -1,0 +1,260 @@
+"""Diagnosis (issue 5): traces, alignment, gap map, effects named on data whose effect is known."""
+
+from __future__ import annotations
+
+import dataclasses
+import json
+import math
+import xml.etree.ElementTree as ET
+
+import numpy as np
+import pytest
+
+from core import InputError
+from core.align import align, isotonic
+from core.diagnose import diagnose
+from core.effects import Setup
+from core.predict import predict
+from core.trace import Trace
+from tests.conftest import machine, path
+
+INF = float("inf")
+
+
+def zigzag(feed=100.0):
+    """A 2-D path with corners, a short-block stretch and an arc."""
+    moves = [
+        {"end": (40, 0, 0)},
+        {"end": (40, 20, 0)},
+        {"end": (0, 20, 0)},
+        {"end": (0, 40, 0), "center": (0, 30, 0), "ccw": False},
+    ]
+    moves += [{"end": (0.8 * (i + 1), 40, 0)} for i in range(50)]
+    moves += [{"end": (40, 60, 0)}, {"end": (80, 60, 0)}]
+    return path(moves, feed=feed)
+
+
+def synthetic_trace(nc, tp, setup, dt=0.001, with_positions=True):
+    """A trace made from a prediction: what a machine with that setup would record."""
+    pred = predict(nc, tp, setup)
+    t, s, v = pred.signal()
+    from core.align import _point_at
+
+    pos = _point_at(tp, s) if with_positions else None
+    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
+    k = np.clip(np.searchsorted(start_s, s, side="right") - 1, 0, tp.n - 1)
+    return Trace(t=t - t[0], pos=pos, v=v, line=tp.line[k], source="synthetic")
+
+
+def test_isotonic_regression():
+    """Pool adjacent violators: [1, 3, 2, 4] -> [1, 2.5, 2.5, 4]."""
+    assert np.allclose(isotonic(np.array([1.0, 3.0, 2.0, 4.0])), [1, 2.5, 2.5, 4])
+
+
+def test_alignment_recovers_arc_length_and_an_offset(nc):
+    """A synthetic trace shifted by (5, -3, 2) mm aligns back: offset found, arc length right."""
+    tp = zigzag()
+    m = machine(jerk=(INF, INF, INF))
+    tr = synthetic_trace(nc, tp, Setup(machine=m))
+    shifted = dataclasses.replace(tr, pos=tr.pos + np.array([5.0, -3.0, 2.0]), line=None)
+    al = align(tp, shifted)
+    assert al.ok and np.allclose(al.offset, [5, -3, 2], atol=0.01)
+    pred = predict(nc, tp, Setup(machine=m))
+    _, s_true, _ = pred.signal()
+    assert np.max(np.abs(al.s - s_true)) < 0.06  # within the path sampling step
+
+
+def test_trace_of_another_program_is_refused(nc):
+    """Positions far from the path: low alignment quality, not a diagnosis."""
+    tp = zigzag()
+    tr = synthetic_trace(nc, tp, Setup(machine=machine()))
+    other = path([{"end": (0, 0, 50)}, {"end": (100, 0, 50)}])
+    al = align(other, tr)
+    assert not al.ok and al.message.startswith("LOW ALIGNMENT QUALITY")
+
+
+@pytest.mark.parametrize(
+    "name,params",
+    [
+        ("feed_override", {"scale": 0.8}),
+        ("block_cycle_time", {"t_block": 0.03}),
+        ("corner_tolerance", {"tolerance": 0.1}),
+        ("servo_lag", {"tau": 0.03}),
+        ("axis_dynamics", {"accel_scale": 0.5, "jerk_scale": 1.0}),
+    ],
+)
+def test_a_known_effect_is_named_first(nc, name, params):
+    """A trace made with one effect switched on: the diagnosis names that effect first and
+    its fitted parameters come back close to the truth."""
+    tp = zigzag()
+    m = machine(jerk=(INF, INF, INF))
+    effects = nc.effects()
+    base = Setup(machine=m)
+    truth = effects[name].apply(base, effects[name].defaults(m) | params)
+    tr = synthetic_trace(nc, tp, truth)
+    d = diagnose(nc, tp, [align(tp, tr)], ["t"], base, "profile", effects)
+    assert d.best_effect == name
+    for k, v in params.items():
+        assert d.effects[0].params[k] == pytest.approx(v, rel=0.1)
+    assert d.gap_rms_after < 0.3 * d.gap_rms_before
+
+
+def test_unchanged_machine_has_no_best_effect(nc):
+    """A trace of the model itself: nothing to explain, best_effect is None."""
+    tp = zigzag()
+    base = Setup(machine=machine(jerk=(INF, INF, INF)))
+    tr = synthetic_trace(nc, tp, base)
+    d = diagnose(nc, tp, [align(tp, tr)], ["t"], base, "profile", nc.effects())
+    assert d.best_effect is None and d.chosen == ()
+
+
+def test_paper_baseline_names_acceleration_ramps(nc):
+    """Against the paper's point model, a real (ramped) motion is explained by ramps."""
+    tp = zigzag()
+    m = machine(jerk=(INF, INF, INF))
+    tr = synthetic_trace(nc, tp, Setup(machine=m))
+    d = diagnose(
+        nc, tp, [align(tp, tr)], ["t"], Setup(machine=m, ramps=False), "paper", nc.effects()
+    )
+    assert d.best_effect == "acceleration_ramps"
+
+
+def test_two_runs_hold_one_out(nc):
+    """With two traces, one is fitted and the other measured."""
+    tp = zigzag()
+    m = machine(jerk=(INF, INF, INF))
+    eff = nc.effects()
+    truth = eff["feed_override"].apply(Setup(machine=m), {"scale": 0.9})
+    als = [align(tp, synthetic_trace(nc, tp, truth)) for _ in range(2)]
+    d = diagnose(nc, tp, als, ["a", "b"], Setup(machine=m), "profile", eff)
+    assert d.held_out.startswith("other runs: fitted on a, measured on b")
+    assert d.best_effect == "feed_override"
+
+
+def test_csv_trace_reader_errors(nc, tmp_path):
+    """CSV traces: missing columns, NaN rows and time going backwards name file and line."""
+    p = tmp_path / "t.csv"
+    p.write_text("t,x,y\n0,0,0\n")
+    with pytest.raises(InputError, match="positions need all of x, y and z"):
+        nc.read_trace(str(p))
+    p.write_text("t,x,y,z,v\n0,0,0,0,0\n0.001,nan,0,0,1\n")
+    with pytest.raises(InputError, match=r"t\.csv:3: 'nan' \(NaN or infinite\)"):
+        nc.read_trace(str(p))
+    p.write_text("t,x,y,z,v\n0,0,0,0,0\n0.002,1,0,0,1\n0.001,2,0,0,1\n")
+    with pytest.raises(InputError, match=r"t\.csv:4: time does not increase"):
+        nc.read_trace(str(p))
+    p.write_text("t,x,y,z,v\n0,0,0,0,0\n0.001,abc,0,0,1\n")
+    with pytest.raises(InputError, match=r"t\.csv:3: 'abc' is not a number"):
+        nc.read_trace(str(p))
+
+
+def test_shdr_reader(nc, tmp_path):
+    """MTConnect SHDR: events held until they change; Feed_Rate in mm/s, Block_Number lines."""
+    p = tmp_path / "r.txt"
+    p.write_text(
+        "2017-02-08T09:58:11.0000000Z|Block_Number|1\n"
+        "2017-02-08T09:58:11.5000000Z|Feed_Rate|10\n"
+        "2017-02-08T09:58:12.0000000Z|Block_Number|2\n"
+        "2017-02-08T09:58:12.2500000Z|Feed_Rate|20|Block_Number|3\n"
+    )
+    tr = nc.read_trace(str(p))
+    assert np.allclose(tr.t, [0.0, 0.5, 0.75])
+    assert list(tr.line) == [1, 2, 3] and np.allclose(tr.v, [10, 10, 20])
+    assert tr.kind == "actual" and tr.pos is None
+
+
+def test_diagnose_command(tmp_path, capsys):
+    """`ncperf diagnose` on a G-code program and a CSV trace made with a 0.8 override: the
+    report names feed_override, the JSON has the documented keys, the SVG parses."""
+    from adapters.gcode import read_gcode
+    from core import load_preset
+    from core.cli import main
+
+    prog = tmp_path / "p.ngc"
+    prog.write_text("G21 G90 G64 P0.01\nG1 X40 F3000\nY20\nX0\nY40\nX40\nM2\n")
+    tp = read_gcode(prog.read_bytes(), str(prog))
+    from core import Ncperf
+
+    nc = Ncperf()
+    m = load_preset("linuxcnc-sim")
+    eff = nc.effects()
+    truth = eff["feed_override"].apply(Setup(machine=m), {"scale": 0.8})
+    tr = synthetic_trace(nc, tp, truth)
+    csv = tmp_path / "t.csv"
+    rows = np.column_stack([tr.t, tr.pos, tr.v, tr.line])
+    np.savetxt(
+        csv, rows, delimiter=",", header="t,x,y,z,v,line", comments="", fmt=["%.6f"] * 5 + ["%d"]
+    )
+    js, svg = tmp_path / "d.json", tmp_path / "d.svg"
+    assert (
+        main(
+            [
+                "diagnose",
+                str(prog),
+                str(csv),
+                "--machine",
+                "linuxcnc-sim",
+                "--json",
+                str(js),
+                "--svg",
+                str(svg),
+            ]
+        )
+        == 0
+    )
+    out = capsys.readouterr().out
+    assert "best effect      feed_override" in out
+    data = json.loads(js.read_text())
+    for key in (
+        "baseline",
+        "gap_rms_before",
+        "zones",
+        "effects",
+        "best_effect",
+        "chosen",
+        "gap_rms_after",
+    ):
+        assert key in data
+    assert data["best_effect"] == "feed_override" and data["chosen"][0] == "feed_override"
+    assert data["effects"][0]["params"]["scale"] == pytest.approx(0.8, abs=0.02)
+    assert math.isfinite(data["gap_rms_after"]) and data["gap_rms_after"] < data["gap_rms_before"]
+    ET.parse(svg)
+
+
+def test_diagnose_refuses_a_trace_of_another_program(tmp_path):
+    """A trace that does not follow the program: exit 1, one line, no output files."""
+    import subprocess
+    import sys
+
+    from tests.conftest import ROOT
+
+    prog = tmp_path / "p.ngc"
+    prog.write_text("G21 G90\nG0 X0 Y0 Z0\nG1 X40 F3000\nY20\nM2\n")
+    csv = tmp_path / "t.csv"
+    t = np.arange(0, 1, 0.001)
+    np.savetxt(
+        csv,
+        np.column_stack([t, 100 + t, 50 + 0 * t, 0 * t, 0 * t + 1]),
+        delimiter=",",
+        header="t,x,y,z,v",
+        comments="",
+    )
+    r = subprocess.run(
+        [
+            sys.executable,
+            "-m",
+            "core",
+            "diagnose",
+            str(prog),
+            str(csv),
+            "--json",
+            str(tmp_path / "o.json"),
+        ],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    last = r.stderr.strip().splitlines()[-1]  # notices about the program come first
+    assert r.returncode == 1 and "Traceback" not in r.stderr
+    assert last.startswith(f"{csv}: LOW ALIGNMENT QUALITY")
+    assert not (tmp_path / "o.json").exists()
