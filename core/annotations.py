@@ -244,10 +244,14 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
         return () if count is not None else 0
     feed = tp.is_feed
     t_up, t_dn, d_up, d_dn, _ = profile._phases
+    th0, th1 = profile._hold_times
+    # The holds at a move's ends (inserted arcs) belong with its acceleration and braking.
+    d_up = d_up + profile.hold_start
+    d_dn = d_dn + profile.hold_end
     with np.errstate(invalid="ignore", divide="ignore"):
         fast = ~feed | (profile.v_peak >= (1.0 - ZONE_THRESHOLD) * tp.feed)
-        lost_up = np.where(feed, t_up - d_up / tp.feed, 0.0)
-        lost_dn = np.where(feed, t_dn - d_dn / tp.feed, 0.0)
+        lost_up = np.where(feed, t_up + th0 - d_up / tp.feed, 0.0)
+        lost_dn = np.where(feed, t_dn + th1 - d_dn / tp.feed, 0.0)
     brk = np.flatnonzero(fast)
     n_z = brk.size + 1
     # Zone of each move: zone m lies between break m-1 and break m.

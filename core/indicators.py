@@ -60,7 +60,12 @@ class Indicator:
     labels : tuple of str
         Limit names, e.g. ("jerk X", "acceleration Y", "block time").
     values : mapping of str to (m,) arrays
-        Extra columns for reports (e.g. the inserted radius, mm).
+        Extra columns for reports (e.g. the inserted radius, mm). One the core reads:
+        ``hold_mm``, the distance on each side of a junction over which the speed stays at
+        the indicator's feed (model 1: the inserted arc's tangent length; model 2: the
+        distance run during the transition time), and optionally ``travel_mm``, the length
+        the tool actually runs over each side of it (model 1: half the inserted arc,
+        R beta / 2, shorter than the programmed R tan(beta / 2); default ``hold_mm``).
     """
 
     name: str
@@ -115,6 +120,11 @@ class Evaluation:
         Predicted feed: the lowest indicator feed, at most the programmed one.
     junction_indicator, junction_limit : (m,) int
         Indices into ``indicator_names`` and ``labels`` of what binds.
+    junction_hold : (m,) float, mm
+        The binding indicator's ``hold_mm`` (0 where it gives none, or where the programmed
+        feed binds).
+    junction_travel : (m,) float, mm
+        Its ``travel_mm`` (the length run over each side of the hold).
     element_feed : (n,) float, mm/s
         Predicted feed on each block (programmed unless an element indicator caps it).
     element_indicator, element_limit : (n,) int
@@ -137,6 +147,14 @@ class Evaluation:
     element_indicator: NDArray[np.int64]
     element_limit: NDArray[np.int64]
     min_length: NDArray[np.float64]
+    junction_hold: NDArray[np.float64] | None = None
+    junction_travel: NDArray[np.float64] | None = None
+
+    def __post_init__(self) -> None:
+        if self.junction_hold is None:
+            object.__setattr__(self, "junction_hold", np.zeros(self.junction.size))
+        if self.junction_travel is None:
+            object.__setattr__(self, "junction_travel", self.junction_hold)
 
     @cached_property
     def junction_reduction(self) -> NDArray[np.float64]:
@@ -175,7 +193,7 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     tp = toolpath
     names: list[str] = []
     label_id: dict[str, int] = {PROGRAMMED: 0}
-    parts: dict[str, list[tuple[NDArray, NDArray, NDArray, NDArray]]] = {
+    parts: dict[str, list[tuple[NDArray, NDArray, NDArray, NDArray, NDArray]]] = {
         "junction": [],
         "element": [],
     }
@@ -190,11 +208,19 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         bound = tp.n - 1 if ind.at == "junction" else tp.n
         if ind.index.size and (ind.index.min() < 0 or ind.index.max() >= bound):
             raise ValueError(f"indicator {ind.name!r}: {ind.at} index out of range 0..{bound - 1}")
+        hold = np.asarray(ind.values.get("hold_mm", np.zeros(ind.index.size)), dtype=np.float64)
+        travel = np.asarray(ind.values.get("travel_mm", hold), dtype=np.float64)
         parts[ind.at].append(
-            (ind.index, ind.feed, np.full(ind.index.size, nid, dtype=np.int64), limit)
+            (
+                ind.index,
+                ind.feed,
+                np.full(ind.index.size, nid, dtype=np.int64),
+                limit,
+                np.stack([hold, travel]),
+            )
         )
 
-    def lowest(kind: str) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    def lowest(kind: str) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
         # Dense passes over the junctions (or elements), no sort: the first indicator to
         # report a place claims it (so a record with no limit, feed inf, still names its
         # indicator), then any lower feed takes it over; ties keep the earlier indicator.
@@ -202,18 +228,20 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         feed = np.full(size, np.inf)
         ind = np.full(size, -1, dtype=np.int64)
         lim = np.zeros(size, dtype=np.int64)
-        for idx, f, i, lab in parts[kind]:
+        hold = np.zeros((2, size))
+        for idx, f, i, lab, h in parts[kind]:
             new = ind[idx] < 0
             sel = idx[new]
-            feed[sel], ind[sel], lim[sel] = f[new], i[new], lab[new]
-        for idx, f, i, lab in parts[kind]:
+            feed[sel], ind[sel], lim[sel], hold[:, sel] = f[new], i[new], lab[new], h[:, new]
+        for idx, f, i, lab, h in parts[kind]:
             better = f < feed[idx]
             sel = idx[better]
             feed[sel], ind[sel], lim[sel] = f[better], i[better], lab[better]
+            hold[:, sel] = h[:, better]
         where = np.flatnonzero(ind >= 0)
-        return where, feed[where], ind[where], lim[where]
+        return where, feed[where], ind[where], lim[where], hold[:, where]
 
-    j, jfeed, jind, jlim = lowest("junction")
+    j, jfeed, jind, jlim, jhold = lowest("junction")
     jprog = np.fmin(tp.feed[j], tp.feed[j + 1])
     not_below = ~(jfeed < jprog)
     jlim = np.where(not_below, 0, jlim)
@@ -222,7 +250,7 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     efeed = tp.feed.copy()
     eind = np.full(tp.n, -1, dtype=np.int64)
     elim = np.full(tp.n, -1, dtype=np.int64)
-    e, ef, ei, el = lowest("element")
+    e, ef, ei, el, _ = lowest("element")
     below = ef < efeed[e]
     efeed[e[below]] = ef[below]
     eind[e[below]] = ei[below]
@@ -244,4 +272,6 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         min_length=np.where(
             tp.is_feed, min_block_length(tp.feed, machine.interpolation_time), np.nan
         ),
+        junction_hold=np.where(not_below, 0.0, jhold[0]),
+        junction_travel=np.where(not_below, 0.0, jhold[1]),
     )

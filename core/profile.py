@@ -35,10 +35,13 @@ speed curve being point-symmetric, covers (v0 + v1)/2 * T. A trapezoid ramp with
 effective acceleration A_eff = dv / T has the same duration and the same distance. ncperf
 therefore finds the acceleration and braking ramps of the trapezoid solution (chains of
 moves accelerating or braking from one speed to another), gives every move of a ramp the
-A_eff of the ramp's whole speed change, and solves again; a few rounds settle it. The
-ramps' times and lengths are those of S-curves; the speed inside a ramp is drawn as a
-straight line in time, not as the S. The normal acceleration that arcs already use is not
-subtracted from the tangential budget.
+A_eff of the ramp's whole speed change, and solves again; a few rounds settle it (where a
+move's A_eff turns back and forth between rounds, the geometric mean of the last two). The
+ramps' times and lengths are those of S-curves, and so is the speed inside a ramp (in time
+and along the path, :func:`s_curve`): at the same share of the ramp's time the S curve
+is at its own speed and a little behind (accelerating) or ahead (braking) of the
+trapezoid, both meeting at the ramp's ends. The normal acceleration that arcs already use is
+not subtracted from the tangential budget.
 """
 
 from __future__ import annotations
@@ -86,6 +89,45 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
         t = np.where(dv >= a * a / j, t_full, t_short)
         out = dv / t
     return np.where(np.isfinite(j) & (dv > _EPS), out, a)
+
+
+def s_curve(
+    p: ArrayLike, dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The S shape of a jerk-limited speed change, normalised.
+
+    A change ``dv`` at acceleration ``acc`` and jerk ``jerk`` reaches the peak acceleration
+    a_p = min(A, sqrt(dv J)) after t_j = a_p / J and lasts T = dv / a_p + t_j; its
+    acceleration is a trapezoid in time whose ramps take r = t_j / T of it. At the share
+    ``p`` of T, returns the share g of ``dv`` gained and G = integral_0^p g (1/2 at p = 1,
+    as for the straight line g = p, G = p^2 / 2 of an infinite jerk: same duration and
+    distance, only the shape differs).
+    """
+    p = np.clip(np.asarray(p, dtype=np.float64), 0.0, 1.0)
+    dv = np.asarray(dv, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        a_p = np.minimum(acc, np.sqrt(dv * jerk))
+        t_j = a_p / jerk
+        total = dv / a_p + t_j
+        r = np.where((dv > _EPS) & np.isfinite(jerk) & (total > 0), t_j / total, 0.0)
+    r = np.clip(np.nan_to_num(r), 0.0, 0.5)
+    c = 1.0 / (1.0 - r)
+    rs = np.maximum(r, 1e-300)
+    q = 1.0 - p
+    first, last = p < r, p > 1.0 - r
+    g = np.where(
+        first, c * p * p / (2 * rs), np.where(last, 1.0 - c * q * q / (2 * rs), c * (p - 0.5 * r))
+    )
+    big_g = np.where(
+        first,
+        c * p**3 / (6 * rs),
+        np.where(
+            last,
+            0.5 - q + c * q**3 / (6 * rs),
+            c * r * r / 6 + c * (0.5 * (p * p - r * r) - 0.5 * r * (p - r)),
+        ),
+    )
+    return g, big_g
 
 
 def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -141,6 +183,16 @@ class Profile:
         Effective tangential acceleration and braking used on each move (S-curve ramps).
     time : (n,) float, s
         Motion time of each move (its dwell not included).
+    hold_start, hold_end : (n,) float, mm
+        Stretches at the start and end of each move run at its entry and exit speed: the
+        inserted arc of a corner, the transition of a curvature jump.
+    hold_start_ratio, hold_end_ratio : (n,) float
+        Length actually run per mm of hold (the arc of a corner is shorter than its tangent
+        stretches: (beta/2) / tan(beta/2)); 1 elsewhere.
+    ramps : tuple of (n,) arrays, or None
+        With a jerk limit: the lower speed and whole speed change of the acceleration ramp
+        and of the braking ramp each move's phases belong to, and the move's tangential
+        acceleration and jerk limits (the S shape of the speed inside ramps).
     """
 
     evaluation: Evaluation
@@ -151,6 +203,20 @@ class Profile:
     a_up: NDArray[np.float64]
     a_down: NDArray[np.float64]
     time: NDArray[np.float64]
+    hold_start: NDArray[np.float64] | None = None
+    hold_end: NDArray[np.float64] | None = None
+    hold_start_ratio: NDArray[np.float64] | None = None
+    hold_end_ratio: NDArray[np.float64] | None = None
+    ramps: tuple[NDArray, ...] | None = None
+
+    def __post_init__(self) -> None:
+        n = self.time.size
+        for name in ("hold_start", "hold_end"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.zeros(n))
+        for name in ("hold_start_ratio", "hold_end_ratio"):
+            if getattr(self, name) is None:
+                object.__setattr__(self, name, np.ones(n))
 
     @property
     def toolpath(self) -> ToolPath:
@@ -174,15 +240,26 @@ class Profile:
 
     @cached_property
     def _phases(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
-        """Durations and lengths of each move's acceleration, cruise and braking."""
+        """Durations and lengths of each move's acceleration, cruise and braking (between
+        its holds)."""
         v0, v1, vp = self.v_entry, self.v_exit, self.v_peak
         au, ad = self.a_up, self.a_down
         t_up = (vp - v0) / au
         t_dn = (vp - v1) / ad
         d_up = (vp**2 - v0**2) / (2 * au)
         d_dn = (vp**2 - v1**2) / (2 * ad)
-        d_cr = np.maximum(self.toolpath.length - d_up - d_dn, 0.0)
+        inner = self.toolpath.length - self.hold_start - self.hold_end
+        d_cr = np.maximum(inner - d_up - d_dn, 0.0)
         return t_up, t_dn, d_up, d_dn, d_cr
+
+    @cached_property
+    def _hold_times(self) -> tuple[NDArray, NDArray]:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            h0 = np.where(
+                self.hold_start > 0, self.hold_start_ratio * self.hold_start / self.v_entry, 0.0
+            )
+            h1 = np.where(self.hold_end > 0, self.hold_end_ratio * self.hold_end / self.v_exit, 0.0)
+        return np.nan_to_num(h0, posinf=0.0), np.nan_to_num(h1, posinf=0.0)
 
     @cached_property
     def lost_time(self) -> NDArray[np.float64]:
@@ -195,14 +272,52 @@ class Profile:
     def speed_at(self, s: ArrayLike) -> NDArray[np.float64]:
         """Predicted speed (mm/s) at arc lengths ``s`` (mm) from the program start."""
         s = np.asarray(s, dtype=np.float64)
+        if s.ndim != 1:
+            return self.speed_at(s.reshape(-1)).reshape(s.shape)
         tp = self.toolpath
         k = np.clip(np.searchsorted(self.start_s, s, side="right") - 1, 0, tp.n - 1)
         d = np.clip(s - self.start_s[k], 0.0, tp.length[k])
-        _, _, d_up, d_dn, d_cr = self._phases
-        up = np.sqrt(np.maximum(self.v_entry[k] ** 2 + 2 * self.a_up[k] * d, 0.0))
-        rest = tp.length[k] - d
+        h0, h1 = self.hold_start[k], self.hold_end[k]
+        into = np.maximum(d - h0, 0.0)
+        up = np.sqrt(np.maximum(self.v_entry[k] ** 2 + 2 * self.a_up[k] * into, 0.0))
+        rest = np.maximum(tp.length[k] - h1 - d, 0.0)
         down = np.sqrt(np.maximum(self.v_exit[k] ** 2 + 2 * self.a_down[k] * rest, 0.0))
-        return np.minimum(np.minimum(up, down), self.v_peak[k])
+        v = np.minimum(np.minimum(up, down), self.v_peak[k])
+        if self.ramps is None:
+            return v
+        # Inside a jerk-limited ramp: the ramp's share p where the S curve is at this place
+        # (bisection; the place moves monotonically with p), then its speed there.
+        lo_u, dv_u, lo_d, dv_d, acc, jerk = self.ramps
+        for rising in (True, False):
+            if rising:
+                sel = np.flatnonzero((up <= down) & (up < self.v_peak[k]) & (dv_u[k] > _EPS))
+            else:
+                sel = np.flatnonzero((down < up) & (down < self.v_peak[k]) & (dv_d[k] > _EPS))
+            if sel.size == 0:
+                continue
+            kk = k[sel]
+            lo, dv = (lo_u[kk], dv_u[kk]) if rising else (lo_d[kk], dv_d[kk])
+            a = self.a_up[kk] if rising else self.a_down[kk]
+            vb = self.v_entry[kk] if rising else self.v_exit[kk]
+            target = into[sel] if rising else rest[sel]
+            span = dv * dv / a  # dv * T, T = dv / a the ramp's duration
+
+            def place(p, lo=lo, dv=dv, a=a, vb=vb, span=span, kk=kk, rising=rising):
+                vt = lo + p * dv if rising else lo + (1.0 - p) * dv
+                _, big_g = s_curve(p, dv, acc[kk], jerk[kk])
+                x = (vt * vt - vb * vb) / (2 * a) + span * (big_g - 0.5 * p * p)
+                return x if rising else -x  # increasing in p either way
+
+            a_p, b_p = np.zeros(sel.size), np.ones(sel.size)
+            goal = target if rising else -target
+            for _ in range(30):
+                mid = 0.5 * (a_p + b_p)
+                below = place(mid) < goal
+                a_p = np.where(below, mid, a_p)
+                b_p = np.where(below, b_p, mid)
+            g_share, _ = s_curve(0.5 * (a_p + b_p), dv, acc[kk], jerk[kk])
+            v[sel] = lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
+        return v
 
     def sample(self, dt: float = 0.001) -> Samples:
         """The profile every ``dt`` seconds from 0 to the cycle time (both ends included)."""
@@ -214,21 +329,62 @@ class Profile:
         k = np.clip(np.searchsorted(self.start_time, t, side="right") - 1, 0, tp.n - 1)
         tau = t - self.start_time[k]
         t_up, t_dn, d_up, d_dn, d_cr = self._phases
+        th0, th1 = self._hold_times
         v0, vp, ad, au = self.v_entry[k], self.v_peak[k], self.a_down[k], self.a_up[k]
+        v1 = self.v_exit[k]
         tu, tdn, du = t_up[k], t_dn[k], d_up[k]
+        h0, t0 = self.hold_start[k], th0[k]
         with np.errstate(divide="ignore", invalid="ignore"):
             t_cr = np.where(vp > 0, d_cr[k] / vp, 0.0)
-        tau = np.minimum(tau, tu + t_cr + tdn)  # a dwell holds the end of the move
-        in_up = tau < tu
-        in_cr = ~in_up & (tau < tu + t_cr)
-        td = np.maximum(tau - tu - t_cr, 0.0)
-        d = np.where(
+        # Phases: hold at v0, accelerate, cruise, brake, hold at v1 (then any dwell).
+        tau = np.minimum(tau, t0 + tu + t_cr + tdn + th1[k])
+        in_h0 = tau < t0
+        tr = np.maximum(tau - t0, 0.0)
+        in_up = ~in_h0 & (tr < tu)
+        in_cr = ~in_h0 & ~in_up & (tr < tu + t_cr)
+        in_dn = ~in_h0 & ~in_up & ~in_cr & (tr < tu + t_cr + tdn)
+        td = np.clip(tr - tu - t_cr, 0.0, tdn)
+        th = np.maximum(tr - tu - t_cr - tdn, 0.0)
+        d_ramps = np.where(
             in_up,
-            v0 * tau + 0.5 * au * tau**2,
-            np.where(in_cr, du + vp * (tau - tu), du + d_cr[k] + vp * td - 0.5 * ad * td**2),
+            v0 * tr + 0.5 * au * tr**2,
+            np.where(in_cr, du + vp * (tr - tu), du + d_cr[k] + vp * td - 0.5 * ad * td**2),
         )
-        v = np.where(in_up, v0 + au * tau, np.where(in_cr, vp, vp - ad * td))
+        # In a hold the tool runs r mm per mm of programmed path (the corner's arc).
+        r0, r1 = self.hold_start_ratio[k], self.hold_end_ratio[k]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            in_hold0 = np.where(r0 > 0, v0 * tau / r0, h0)
+            in_hold1 = np.where(r1 > 0, v1 * th / r1, self.hold_end[k])
+        d = np.where(
+            in_h0, in_hold0, h0 + d_ramps + np.where(in_h0 | in_up | in_cr | in_dn, 0.0, in_hold1)
+        )
+        v = np.where(
+            in_h0,
+            v0,
+            np.where(in_up, v0 + au * tr, np.where(in_cr, vp, np.where(in_dn, vp - ad * td, v1))),
+        )
         d = np.clip(d, 0.0, tp.length[k])
+        if self.ramps is not None:
+            # Inside jerk-limited ramps: the S curve at the same share of the ramp's time;
+            # it covers a little less (accelerating) or more (braking) than the straight
+            # line until the ramp's end, where both meet.
+            lo_u, dv_u, lo_d, dv_d, acc, jerk = (r[k] for r in self.ramps)
+            shift = np.zeros(t.size)
+            for rising in (True, False):
+                sel = np.flatnonzero((in_up & (dv_u > _EPS)) if rising else (in_dn & (dv_d > _EPS)))
+                if sel.size == 0:
+                    continue
+                lo, dv = (lo_u[sel], dv_u[sel]) if rising else (lo_d[sel], dv_d[sel])
+                a = au[sel] if rising else ad[sel]
+                p = (v[sel] - lo) / dv if rising else (lo + dv - v[sel]) / dv
+                p = np.clip(p, 0.0, 1.0)
+                g_share, big_g = s_curve(p, dv, acc[sel], jerk[sel])
+                sign = 1.0 if rising else -1.0
+                shift[sel] = sign * (dv * dv / a) * (big_g - 0.5 * p * p)
+                v[sel] = lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
+            s_abs = self.start_s[k] + d + shift
+            k = np.clip(np.searchsorted(self.start_s, s_abs, side="right") - 1, 0, tp.n - 1)
+            d = np.clip(s_abs - self.start_s[k], 0.0, tp.length[k])
         pts = points_along(tp, k, d)
         return Samples(
             t=t,
@@ -278,10 +434,40 @@ def boundary_caps(ev: Evaluation, cap: NDArray[np.float64]) -> NDArray[np.float6
     return b
 
 
-def _passes(b: NDArray, length: NDArray, a_up: NDArray, a_dn: NDArray) -> NDArray:
-    """Boundary speeds (n + 1,) from the forward and backward passes (see module docstring)."""
-    w_up = np.concatenate([[0.0], np.cumsum(2.0 * a_up * length)])
-    w_dn = np.concatenate([[0.0], np.cumsum(2.0 * a_dn * length)])
+def _holds(ev: Evaluation) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """(n,) hold lengths at the start and end of every move (mm of programmed path), from the
+    junctions' ``hold_mm``, at most half of each move; and the length actually run per mm of
+    hold (``travel_mm / hold_mm``: below 1 where the tool cuts a corner on its arc)."""
+    tp = ev.toolpath
+    h_start = np.zeros(tp.n)
+    h_end = np.zeros(tp.n)
+    r_start = np.ones(tp.n)
+    r_end = np.ones(tp.n)
+    h = np.nan_to_num(ev.junction_hold, nan=0.0, posinf=0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        ratio = np.where(h > 0, ev.junction_travel / h, 1.0)
+    ratio = np.clip(np.nan_to_num(ratio, nan=1.0), 0.0, 1.0)
+    h_end[ev.junction] = h
+    h_start[ev.junction + 1] = h
+    r_end[ev.junction] = ratio
+    r_start[ev.junction + 1] = ratio
+    half = 0.5 * tp.length
+    return np.minimum(h_start, half), np.minimum(h_end, half), r_start, r_end
+
+
+def _passes(
+    b: NDArray, length: NDArray, a_up: NDArray, a_dn: NDArray, h_start: NDArray, h_end: NDArray
+) -> NDArray:
+    """Boundary speeds (n + 1,) from the forward and backward passes (see module docstring).
+
+    The machine changes speed only between the holds at the ends of each move (the inserted
+    arc of a corner, a curvature transition): the passes use the length left between them.
+    At a boundary whose cap does not bind, the hold then runs at the boundary's speed, which
+    is slightly conservative.
+    """
+    inner = np.maximum(length - h_start - h_end, 0.0)
+    w_up = np.concatenate([[0.0], np.cumsum(2.0 * a_up * inner)])
+    w_dn = np.concatenate([[0.0], np.cumsum(2.0 * a_dn * inner)])
     b2 = b * b
     fwd = np.minimum.accumulate(b2 - w_up) + w_up
     bwd = np.minimum.accumulate((b2 + w_dn)[::-1])[::-1] - w_dn
@@ -299,9 +485,25 @@ def _window_caps(b: NDArray, length: NDArray, a_dn: NDArray, lookahead: int | No
     return np.minimum(b, np.sqrt(np.maximum(w_dn[ahead] - w_dn, 0.0)))
 
 
-def _moves(v: NDArray, length: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray):
-    """Entry, peak, exit speed and time of every move from its boundary speeds."""
+def _moves(
+    v: NDArray,
+    length: NDArray,
+    cap: NDArray,
+    a_up: NDArray,
+    a_dn: NDArray,
+    h_start: NDArray,
+    h_end: NDArray,
+    r_start: NDArray,
+    r_end: NDArray,
+):
+    """Entry, peak, exit speed and time of every move from its boundary speeds; the holds
+    at its ends run at the entry and exit speed (over ``r * h`` of actual travel)."""
     v0, v1 = v[:-1], v[1:]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_hold = np.nan_to_num(
+            np.where(h_start > 0, r_start * h_start / v0, 0.0), posinf=0.0
+        ) + np.nan_to_num(np.where(h_end > 0, r_end * h_end / v1, 0.0), posinf=0.0)
+    length = length - h_start - h_end
     with np.errstate(divide="ignore", invalid="ignore"):
         peak2 = (2.0 * length + v0**2 / a_up + v1**2 / a_dn) / (1.0 / a_up + 1.0 / a_dn)
     peak = np.minimum(cap, np.sqrt(np.maximum(peak2, 0.0)))
@@ -311,12 +513,13 @@ def _moves(v: NDArray, length: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArr
     d_cr = np.maximum(length - (peak**2 - v0**2) / (2 * a_up) - (peak**2 - v1**2) / (2 * a_dn), 0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         t_cr = np.where(peak > 0, d_cr / peak, 0.0)
-    return v0, peak, v1, t_up + t_cr + t_dn, d_cr
+    return v0, peak, v1, t_up + t_cr + t_dn + t_hold, d_cr
 
 
-def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray]:
-    """For each move, whether it has an acceleration (or braking) phase, and the whole speed
-    change of the ramp that phase belongs to (chains of moves accelerating end to end)."""
+def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, NDArray]:
+    """For each move, whether it has an acceleration (or braking) phase, the whole speed
+    change of the ramp that phase belongs to (chains of moves accelerating end to end), and
+    the ramp's lower speed (where an acceleration starts, where a braking ends)."""
     n = v0.size
     tol = 1e-9 * np.maximum(peak, 1.0)
     if rising:
@@ -334,7 +537,7 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray]:
     cid = np.cumsum(start) - 1
     idx = np.flatnonzero(phase)
     if idx.size == 0:
-        return phase, np.zeros(n)
+        return phase, np.zeros(n), np.zeros(n)
     c = cid[idx]
     n_c = int(c.max()) + 1
     first = np.full(n_c, n, dtype=np.int64)
@@ -349,16 +552,39 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray]:
         lo = v1[last]
     dv = np.zeros(n)
     dv[idx] = (hi - lo)[c]
-    return phase, dv
+    low = np.zeros(n)
+    low[idx] = lo[c]
+    return phase, dv, low
+
+
+def _damped(a: NDArray, new: NDArray, last: NDArray) -> tuple[NDArray, NDArray]:
+    """The next accelerations of the jerk iteration, and the sign of each step (-1, 0, 1):
+    the geometric mean of ``a`` and ``new`` where the step reverses the last one."""
+    step = np.sign(new - a)
+    back = step * last < 0
+    out = np.where(back, np.sqrt(a * new), new)
+    return out, np.sign(out - a)
 
 
 def build_profile(
-    ev: Evaluation, *, rounds: int = JERK_ROUNDS, lookahead: int | None = None
+    ev: Evaluation,
+    *,
+    rounds: int = JERK_ROUNDS,
+    lookahead: int | None = None,
+    end_factor: float = 1.0,
+    arc_factor: float = 1.0,
 ) -> Profile:
     """The predicted feed profile of an evaluated tool path (see the module docstring).
 
-    ``lookahead``: plan only that many blocks ahead -- the speed at every boundary must let
-    the machine stop at the end of the blocks it sees (None: the whole program).
+    Parameters
+    ----------
+    lookahead : int, optional
+        Plan only that many blocks ahead: the speed at every boundary must let the machine
+        stop at the end of the blocks it sees (None: the whole program).
+    end_factor : float
+        Share of the tangential acceleration used on the program's last block.
+    arc_factor : float
+        Share of the tangential acceleration used on programmed arcs.
     """
     tp = ev.toolpath
     m = ev.machine
@@ -367,18 +593,33 @@ def build_profile(
     if rapid.any():
         cap[rapid] = m.rapid_speed(tp.tangent_start[rapid])
     acc, jerk = tangential_limits(tp, m.max_acceleration, m.max_jerk)
+    if arc_factor != 1.0:
+        acc = np.where(tp.is_arc, acc * arc_factor, acc)
+    if end_factor != 1.0 and tp.n:
+        acc[-1] *= end_factor
     b = boundary_caps(ev, cap)
     length = tp.length
+    h_start, h_end, r_start, r_end = _holds(ev)
     a_up, a_dn = acc.copy(), acc.copy()
+    step_up = np.zeros(tp.n)
+    step_dn = np.zeros(tp.n)
     for r in range(max(rounds, 1)):
-        v = _passes(_window_caps(b, length, a_dn, lookahead), length, a_up, a_dn)
-        v0, peak, v1, time, d_cr = _moves(v, length, cap, a_up, a_dn)
+        v = _passes(_window_caps(b, length, a_dn, lookahead), length, a_up, a_dn, h_start, h_end)
+        v0, peak, v1, time, d_cr = _moves(
+            v, length, cap, a_up, a_dn, h_start, h_end, r_start, r_end
+        )
         if r == rounds - 1 or not np.isfinite(jerk).any():
             break
-        up, dv_up = _ramp_changes(v0, peak, v1, d_cr, rising=True)
-        dn, dv_dn = _ramp_changes(v0, peak, v1, d_cr, rising=False)
+        up, dv_up, _ = _ramp_changes(v0, peak, v1, d_cr, rising=True)
+        dn, dv_dn, _ = _ramp_changes(v0, peak, v1, d_cr, rising=False)
         new_up = np.where(up, effective_acceleration(dv_up, acc, jerk), acc)
         new_dn = np.where(dn, effective_acceleration(dv_dn, acc, jerk), acc)
+        # Where a move's A_eff turns back (a staircase of falling caps: small steps give a low
+        # A_eff, which holds the speed under the caps, which gives one long ramp and a high
+        # A_eff, ...), take the geometric mean of the last two: the rounds then close in on
+        # the answer between the two states instead of alternating.
+        new_up, step_up = _damped(a_up, new_up, step_up)
+        new_dn, step_dn = _damped(a_dn, new_dn, step_dn)
         with np.errstate(divide="ignore", invalid="ignore"):
             change = max(
                 float(np.nanmax(np.abs(new_up / a_up - 1.0), initial=0.0)),
@@ -386,9 +627,19 @@ def build_profile(
             )
         a_up, a_dn = new_up, new_dn
         if change < JERK_CONVERGED:
-            v = _passes(_window_caps(b, length, a_dn, lookahead), length, a_up, a_dn)
-            v0, peak, v1, time, d_cr = _moves(v, length, cap, a_up, a_dn)
+            v = _passes(
+                _window_caps(b, length, a_dn, lookahead), length, a_up, a_dn, h_start, h_end
+            )
+            v0, peak, v1, time, d_cr = _moves(
+                v, length, cap, a_up, a_dn, h_start, h_end, r_start, r_end
+            )
             break
+    if np.isfinite(jerk).any():
+        _, dv_up, lo_up = _ramp_changes(v0, peak, v1, d_cr, rising=True)
+        _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, d_cr, rising=False)
+        ramps = (lo_up, dv_up, lo_dn, dv_dn, acc, jerk)
+    else:
+        ramps = None
     return Profile(
         evaluation=ev,
         cap=cap,
@@ -398,4 +649,9 @@ def build_profile(
         a_up=a_up,
         a_down=a_dn,
         time=time,
+        hold_start=h_start,
+        hold_end=h_end,
+        hold_start_ratio=r_start,
+        hold_end_ratio=r_end,
+        ramps=ramps,
     )

@@ -77,7 +77,8 @@ def at_feed_share(profile: Profile, fraction: float = 0.9) -> float:
     v0, v1, vp = profile.v_entry[f], profile.v_exit[f], profile.v_peak[f]
     up = np.maximum((thr**2 - v0**2) / (2 * profile.a_up[f]), 0.0)
     down = np.maximum((thr**2 - v1**2) / (2 * profile.a_down[f]), 0.0)
-    fast = np.where(vp >= thr * (1 - 1e-12), np.maximum(tp.length[f] - up - down, 0.0), 0.0)
+    holds = profile.hold_start[f] + profile.hold_end[f]  # run at the (slower) boundary speeds
+    fast = np.where(vp >= thr * (1 - 1e-12), np.maximum(tp.length[f] - holds - up - down, 0.0), 0.0)
     return float(fast.sum() / tp.length[f].sum())
 
 

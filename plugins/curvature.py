@@ -78,6 +78,12 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             feed=feed,
             limit=axis,
             labels=LABELS,
-            values={"curvature_jump_per_mm": jump},
+            # Constant speed while the normal acceleration changes, over dt (eq. 11-12).
+            values={
+                "curvature_jump_per_mm": jump,
+                "hold_mm": np.where(
+                    np.isfinite(feed), 0.5 * feed * machine.curvature_transition_time, 0.0
+                ),
+            },
         )
     ]

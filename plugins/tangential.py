@@ -154,6 +154,14 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             feed=feed,
             limit=limit,
             labels=LABELS,
-            values={"radius_mm": radius, "angle_deg": np.degrees(beta)},
+            # The speed stays constant over the inserted arc (sec. 2.1, Figure 2b): from
+            # its tangent point R tan(beta/2) before the corner to the one after; the tool
+            # runs the arc, R beta/2 on each side.
+            values={
+                "radius_mm": radius,
+                "angle_deg": np.degrees(beta),
+                "hold_mm": np.nan_to_num(radius * np.tan(beta / 2.0), nan=0.0, posinf=0.0),
+                "travel_mm": np.nan_to_num(radius * beta / 2.0, nan=0.0, posinf=0.0),
+            },
         )
     ]

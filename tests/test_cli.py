@@ -171,10 +171,16 @@ def test_profile_command_writes_a_trace(tmp_path, capsys):
     p = tmp_path / "line.ngc"
     p.write_text("G21 G90 G64 P0.01\nG1 X100 F6000\nM2\n")
     out = tmp_path / "p.csv"
-    assert (
-        main(["profile", str(p), "--machine", "linuxcnc-sim", "--csv", str(out), "--dt", "0.01"])
-        == 0
+    # LinuxCNC's ini limits without the effects the preset folds in
+    m = tmp_path / "lc.toml"
+    axes = "".join(
+        f"[axes.{a}]\nmax_feed = 15.0\nmax_acceleration = 2.0\nmax_jerk = inf\n" for a in "XYZ"
     )
+    m.write_text(
+        f'name = "lc"\n{axes}[controller]\ninterpolation_time = 0.00102\n'
+        "path_tolerance = 0.01\ncurvature_transition_time = 0.001\n"
+    )
+    assert main(["profile", str(p), "--machine", str(m), "--csv", str(out), "--dt", "0.01"]) == 0
     assert "predicted cycle  1.05 s" in capsys.readouterr().out
     rows = out.read_text().splitlines()
     assert rows[0] == "t,x,y,z,v,line"

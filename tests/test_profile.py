@@ -62,17 +62,31 @@ def test_short_jerk_limited_line(models):
 
 def test_corner_braking_distance(models):
     """Two 10 mm lines with a 90 deg corner at v = 7.768870 mm/s (sqrt(A R)): the machine
-    brakes over (F^2 - v^2) / (2 A) = 1.987929 mm before it."""
+    brakes over (F^2 - v^2) / (2 A) = 1.987929 mm, and holds v over the inserted arc, from
+    R tan(45 deg) = R = 0.024142 mm of programmed path before the corner to as far after
+    it; the tool runs the arc itself, R * pi / 4 = 0.018961 mm on each side."""
     pr = profile(models, [{"end": (10, 0, 0)}, {"end": (10, 10, 0)}], jerk=(INF, INF, INF))
-    v = math.sqrt(2500 * 0.0241421356237)
+    R = 0.0241421356237
+    v = math.sqrt(2500 * R)
     brake = (100**2 - v**2) / 5000
     assert pr.v_exit[0] == pytest.approx(v)
-    assert pr.speed_at(10 - brake - 1e-9) == pytest.approx(100.0)
-    assert pr.speed_at(10 - brake / 2) == pytest.approx(math.sqrt(v**2 + 2500 * brake))
-    # each move: 0.04 s ramp from rest, (100 - v) / 2500 braking, the rest at F
-    cruise = 10 - 2 - brake
-    t_move = 0.04 + (100 - v) / 2500 + cruise / 100
+    assert pr.hold_end[0] == pytest.approx(R) and pr.hold_start[1] == pytest.approx(R)
+    assert pr.speed_at(10 - R - brake - 1e-9) == pytest.approx(100.0)
+    assert pr.speed_at(10 - R - brake / 2) == pytest.approx(math.sqrt(v**2 + 2500 * brake))
+    assert pr.speed_at(10 - R / 2) == pytest.approx(v)
+    assert pr.speed_at(10 + R / 2) == pytest.approx(v)
+    # each move: 0.04 s ramp from rest, (100 - v) / 2500 braking, R pi / 4 at v, the rest at F
+    arc = R * math.pi / 4
+    cruise = 10 - 2 - brake - R
+    t_move = 0.04 + (100 - v) / 2500 + cruise / 100 + arc / v
     assert pr.cycle_time == pytest.approx(2 * t_move, rel=1e-12)
+    # the sampled trace spends R pi / 4 / v at the corner speed on each side, and crosses
+    # the corner point at the middle of that time
+    s = pr.sample(0.0001)
+    slow = np.isclose(s.v, v, atol=1e-6)
+    assert slow.sum() * 0.0001 == pytest.approx(2 * arc / v, abs=0.0003)
+    t_corner = s.t[np.argmin(np.abs(s.s - 10.0))]
+    assert t_corner == pytest.approx(t_move, abs=0.0002)
 
 
 def test_very_short_blocks_never_reach_feed(models):
@@ -157,3 +171,35 @@ def test_cycle_time_of_a_g_code_program(nc):
     assert t0 == pytest.approx(0.25)
     assert t1 == pytest.approx(0.30)
     assert t2 == pytest.approx(0.55)
+
+
+def test_s_curve_inside_a_jerk_limited_ramp(models):
+    """10 mm from rest to rest at F100, A 2500, J 1e5: the ramp 0 -> 100 mm/s reaches A
+    (dv = 100 > A^2 / J = 62.5), t_j = A / J = 0.025 s, T = dv / A + t_j = 0.065 s, and
+    covers 100 * T / 2 = 3.25 mm. Inside it, v = J t^2 / 2 up to t_j (5 mm/s at 10 ms,
+    31.25 at 25 ms, where s = J t^3 / 6 = 0.260417 mm), then 31.25 + A (t - t_j)
+    (68.75 at 40 ms), then F - J (T - t)^2 / 2 (88.75 at 50 ms). Braking mirrors it: the
+    move ends at 2 * 0.065 + (10 - 6.5) / 100 = 0.165 s."""
+    pr = profile(models, [{"end": (10, 0, 0)}], feed=100.0, jerk=(100.0, 100.0, 100.0))  # m/s^3
+    assert pr.cycle_time == pytest.approx(0.165, rel=1e-9)
+    smp = pr.sample(0.0001)
+    at = {round(t, 4): i for i, t in enumerate(smp.t)}
+    for t, v in [
+        (0.01, 5.0),
+        (0.025, 31.25),
+        (0.04, 68.75),
+        (0.05, 88.75),
+        (0.1, 100.0),
+        (0.165 - 0.01, 5.0),
+        (0.165 - 0.04, 68.75),
+    ]:
+        assert smp.v[at[round(t, 4)]] == pytest.approx(v, abs=1e-6), t
+    assert smp.s[at[0.025]] == pytest.approx(1e5 * 0.025**3 / 6, abs=1e-9)
+    assert smp.s[at[0.065]] == pytest.approx(3.25, abs=1e-9)
+    assert smp.s[at[0.1]] == pytest.approx(3.25 + 100 * 0.035, abs=1e-9)
+    assert smp.s[at[0.165 - 0.025]] == pytest.approx(10 - 1e5 * 0.025**3 / 6, abs=1e-9)
+    # Along the path: the same speeds at the same places, braking too.
+    assert pr.speed_at(1e5 * 0.025**3 / 6) == pytest.approx(31.25, abs=1e-5)
+    assert pr.speed_at(10 - 1e5 * 0.025**3 / 6) == pytest.approx(31.25, abs=1e-5)
+    assert pr.speed_at(5.0) == pytest.approx(100.0)
+    assert np.allclose(pr.speed_at(smp.s[1:-1]), smp.v[1:-1], atol=1e-4)

@@ -103,20 +103,24 @@ def test_zones_merge_close_corners_and_rank_by_time_lost(models):
     )
     ev = models.evaluate(tp, machine(jerk=(inf, inf, inf), t_int=0.001))
     pr = build_profile(ev)
-    v = math.sqrt(2500 * 0.0241421356237)
+    R = 0.0241421356237  # the inserted arc's radius, and its tangent length at 90 deg
+    v = math.sqrt(2500 * R)
     F, A = 100.0, 2500.0
     zones = find_zones(ev, pr)
     assert len(zones) == 2
     pair, single = zones  # the pair costs more
     assert (pair.first, pair.last) == (0, 2) and (pair.line_first, pair.line_last) == (1, 3)
     assert pair.discontinuities == 2 and pair.capped_blocks == 0
-    # braking F -> v and accelerating v -> F each lose (F - v)^2 / (2 A F)
-    ramp = (F - v) ** 2 / (2 * A * F)
+    # braking F -> v loses (F - v)^2 / (2 A F); running the inserted arc at v instead of
+    # the tangent length R at F, (R pi / 4) / v - R / F; the same again leaving the corner
+    arc = R * math.pi / 4
+    ramp = (F - v) ** 2 / (2 * A * F) + arc / v - R / F
     assert single.time_lost == pytest.approx(2 * ramp, rel=1e-9)
-    assert single.length == pytest.approx(2 * (F**2 - v**2) / (2 * A), rel=1e-9)
-    # the 0.5 mm move: up and down to 36.199 mm/s, 2 (peak - v) / A, against 0.5 / F
-    peak = math.sqrt(A * 0.5 + v * v)
-    assert pair.time_lost == pytest.approx(2 * ramp + 2 * (peak - v) / A - 0.5 / F, rel=1e-9)
+    assert single.length == pytest.approx(2 * ((F**2 - v**2) / (2 * A) + R), rel=1e-9)
+    # the 0.5 mm move: holds R at both ends, and up and down to sqrt(v^2 + A (0.5 - 2 R))
+    peak = math.sqrt(A * (0.5 - 2 * R) + v * v)
+    inner = 2 * (peak - v) / A + 2 * arc / v
+    assert pair.time_lost == pytest.approx(2 * ramp + inner - 0.5 / F, rel=1e-9)
     assert pair.worst_reduction == pytest.approx(1 - v / F)
     assert pair.cause.startswith("tangential: acceleration")
 
