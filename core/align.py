@@ -40,6 +40,11 @@ FAR = 0.5
 #: covers less than MIN_COVERAGE of the program's feed length.
 MAX_FAR_SHARE = 0.2
 MIN_COVERAGE = 0.5
+#: Distances (mm) that count as equal when two passes of the path coincide.
+TIE = 1e-3
+#: The same in the sequential search without lines, per mm of arc length from where the
+#: samples' own travel puts them (that estimate drifts, so the weight is lower).
+SEQ_TIE = 1e-4
 #: Half-width (samples) of the central difference that turns arc length into feed.
 DIFF_HALF = 2
 #: A trace's own feed column is used when it agrees with its positions: relative RMS
@@ -123,11 +128,21 @@ def sample_path(tp: ToolPath, step: float = STEP) -> tuple[NDArray, NDArray, NDA
     return points_along(tp, owner, d), start_s[owner] + d, owner
 
 
-def _nearest(q: NDArray, p: NDArray) -> tuple[NDArray, NDArray]:
-    """Index of the nearest of ``p`` (k, 3) for each of ``q`` (m, 3), and the distance."""
+def _nearest(
+    q: NDArray, p: NDArray, s_p: NDArray | None = None, s_exp: NDArray | None = None
+) -> tuple[NDArray, NDArray]:
+    """Index of the nearest of ``p`` (k, 3) for each of ``q`` (m, 3), and the distance.
+
+    With ``s_p`` (k,) and ``s_exp`` (m,), points equally near are told apart by how close
+    their arc length is to the expected one (a penalty of SEQ_TIE mm per mm of arc length).
+    """
     d2 = np.einsum("ij,ij->i", q, q)[:, None] - 2 * q @ p.T + np.einsum("ij,ij->i", p, p)[None, :]
-    k = np.argmin(d2, axis=1)
-    return k, np.sqrt(np.maximum(d2[np.arange(q.shape[0]), k], 0.0))
+    d2 = np.maximum(d2, 0.0)
+    if s_p is not None and s_exp is not None:
+        k = np.argmin(d2 + (SEQ_TIE * (s_p[None, :] - s_exp[:, None])) ** 2, axis=1)
+    else:
+        k = np.argmin(d2, axis=1)
+    return k, np.sqrt(d2[np.arange(q.shape[0]), k])
 
 
 def _project(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> tuple[NDArray, NDArray]:
@@ -152,13 +167,21 @@ def _project(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> tuple[NDA
                 continue
             sel = np.flatnonzero(line_of_sample == u)
             a, b = moves_of_line[u]
-            # The move of the line and its neighbours (blends carry a neighbour's line).
+            # The move of the line, or its neighbours (blends carry a neighbour's line)
+            # where one of them is nearer: the line's own move wins ties, such as a plunge
+            # back down the path of the retract before it.
+            own = np.flatnonzero((owner >= a) & (owner <= b))
             win = np.flatnonzero((owner >= a - 1) & (owner <= b + 1))
             for c in range(0, sel.size, 2048):
                 part = sel[c : c + 2048]
-                k, dd = _nearest(q[part], pts[win])
-                s[part] = s_p[win[k]]
+                k, dd = _nearest(q[part], pts[own])
+                s[part] = s_p[own[k]]
                 dist[part] = dd
+                if win.size > own.size:
+                    k2, d2 = _nearest(q[part], pts[win])
+                    nearer = d2 < dd - TIE
+                    s[part[nearer]] = s_p[win[k2[nearer]]]
+                    dist[part[nearer]] = d2[nearer]
             done[sel] = True
         rest = np.flatnonzero(~done)
     else:
@@ -174,7 +197,11 @@ def _project(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> tuple[NDA
             win = np.flatnonzero((s_p >= s_last - AHEAD_MARGIN) & (s_p <= s_last + span))
             if win.size == 0:
                 win = np.arange(s_p.size)
-            k, dd = _nearest(q[part], pts[win])
+            # Where the samples should be if they run on along the path (to tell apart two
+            # passes over the same points, a plunge down its retract).
+            step = np.linalg.norm(np.diff(q[part], axis=0), axis=1)
+            s_exp = s_last + np.concatenate([[0.0], np.cumsum(step)])
+            k, dd = _nearest(q[part], pts[win], s_p[win], s_exp)
             s[part] = s_p[win[k]]
             dist[part] = dd
             s_last = float(np.median(s[part][-8:]))
@@ -194,7 +221,10 @@ def _refine(q: NDArray, s_guess: NDArray, path, half_width: float = 1.0) -> tupl
         cand = np.clip(j[:, None] + k_off[None, :], 0, s_p.size - 1)
         diff = pts[cand] - q[part][:, None, :]
         d2 = np.einsum("mkj,mkj->mk", diff, diff)
-        best = np.argmin(d2, axis=1)
+        # Points of two passes of the path that coincide (a plunge down the retract):
+        # the one nearer the guess along the path.
+        ds = s_p[cand] - s_guess[part][:, None]
+        best = np.argmin(d2 + (TIE * ds) ** 2, axis=1)
         rows = np.arange(best.size)
         s[part] = s_p[cand[rows, best]]
         dist[part] = np.sqrt(d2[rows, best])

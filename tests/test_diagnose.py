@@ -64,6 +64,23 @@ def test_alignment_recovers_arc_length_and_an_offset(nc):
     assert np.max(np.abs(al.s - s_true)) < 0.06  # within the path sampling step
 
 
+@pytest.mark.parametrize("with_lines", [True, False])
+def test_alignment_keeps_a_plunge_apart_from_the_retract_it_retraces(nc, with_lines):
+    """Retract 10 mm, plunge back down the same line, cut 30 mm: the plunge's samples lie on
+    the retract too; they belong to s in [10, 20], not [0, 10]."""
+    tp = path([{"end": (0, 0, 10), "rapid": True}, {"end": (0, 0, 0)}, {"end": (30, 0, 0)}])
+    m = machine(jerk=(INF, INF, INF))
+    tr = synthetic_trace(nc, tp, Setup(machine=m))
+    if not with_lines:
+        tr = dataclasses.replace(tr, line=None)
+    al = align(tp, tr)
+    _, s_true, _ = predict(nc, tp, Setup(machine=m)).signal()
+    assert al.ok
+    assert np.max(np.abs(al.s - s_true)) < 0.06  # within the path sampling step
+    plunge = (s_true > 10.5) & (s_true < 19.5)
+    assert np.all(al.s[plunge] > 10.0)
+
+
 def test_trace_of_another_program_is_refused(nc):
     """Positions far from the path: low alignment quality, not a diagnosis."""
     tp = zigzag()
