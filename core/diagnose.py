@@ -20,6 +20,7 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from dataclasses import dataclass, field
 
@@ -53,6 +54,7 @@ CHUNKS = 16
 #: Grid points per parameter when fitting (then a local refinement).
 GRID_1D = 11
 GRID_2D = 6
+GRID_ND = 4
 REFINE = 8
 PER_MIN = 60.0
 #: Gap classes of the display: (measured - predicted) / F.
@@ -78,6 +80,7 @@ class Data:
     calibration: NDArray[np.bool_]  # grid points used for fitting
     label: str
     weight: NDArray[np.float64]  # time spent at each grid point (s)
+    case: int = 0  # which program (tool path) the trace ran
 
 
 @dataclass(frozen=True)
@@ -89,6 +92,7 @@ class GapZone:
     feature: str
     gap_rms: float  # mm/min
     time_s: float  # measured - predicted time over the zone: > 0 the machine is slower
+    program: str = ""
 
 
 @dataclass(frozen=True)
@@ -119,16 +123,28 @@ class Diagnosis:
     zones_after: tuple[GapZone, ...]
     alignments: tuple[Alignment, ...]
     data: tuple[Data, ...] = field(repr=False)
-    before: Prediction = field(repr=False)
-    after: Prediction = field(repr=False)
+    befores: tuple[Prediction, ...] = field(repr=False)
+    afters: tuple[Prediction, ...] = field(repr=False)
 
-    def move_gap(self) -> NDArray[np.float64]:
+    @property
+    def before(self) -> Prediction:
+        """The baseline prediction of the (first) program."""
+        return self.befores[0]
+
+    @property
+    def after(self) -> Prediction:
+        """The prediction with the chosen effects, of the (first) program."""
+        return self.afters[0]
+
+    def move_gap(self, case: int = 0) -> NDArray[np.float64]:
         """(n,) mean (measured - predicted) / F of each move over the data; NaN where none."""
-        tp = self.before.toolpath
+        tp = self.befores[case].toolpath
         num = np.zeros(tp.n)
         cnt = np.zeros(tp.n)
         for d in self.data:
-            r = (d.v - self.before.speed_at(d.s)) / d.feed
+            if d.case != case:
+                continue
+            r = (d.v - self.befores[case].speed_at(d.s)) / d.feed
             np.add.at(num, d.move, r)
             np.add.at(cnt, d.move, 1.0)
         with np.errstate(invalid="ignore", divide="ignore"):
@@ -161,7 +177,7 @@ class Diagnosis:
         )
 
 
-def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP) -> Data:
+def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
     """The aligned measured feed every ``step`` mm of the feed moves the trace covers."""
     start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
     lo, hi = float(al.s.min()), float(al.s.max())
@@ -184,30 +200,40 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP) -> Dat
         calibration=np.ones(grid.size, dtype=bool),
         label=label,
         weight=weight,
+        case=case,
     )
 
 
 def split(data: list[Data]) -> tuple[list[Data], str]:
-    """Calibration / held-out split (see the module docstring)."""
-    if len(data) >= 2:
+    """Calibration / held-out split (see the module docstring).
+
+    Several runs of one program: alternate runs. Otherwise (one run, or one run of each of
+    several programs): alternate stretches of every run, the parity changing from run to run
+    so that what happens once per program (its end) is fitted on some programs and measured
+    on others.
+    """
+    programs = {d.case for d in data}
+    if len(data) >= 2 and len(programs) == 1:
         out = [
-            Data(d.s, d.v, d.feed, d.move, np.full(d.s.size, k % 2 == 0), d.label, d.weight)
+            dataclasses.replace(d, calibration=np.full(d.s.size, k % 2 == 0))
             for k, d in enumerate(data)
         ]
         cal = ", ".join(d.label for k, d in enumerate(data) if k % 2 == 0)
         held = ", ".join(d.label for k, d in enumerate(data) if k % 2 == 1)
         return out, f"other runs: fitted on {cal}, measured on {held}"
-    d = data[0]
-    # Alternate stretches of the run, cut at move boundaries near equal arc lengths.
-    edges = np.quantile(d.s, np.linspace(0, 1, CHUNKS + 1))
-    chunk = np.clip(np.searchsorted(edges, d.s, side="right") - 1, 0, CHUNKS - 1)
-    return (
-        [Data(d.s, d.v, d.feed, d.move, chunk % 2 == 0, d.label, d.weight)],
-        f"alternate stretches of one run ({CHUNKS} stretches, even ones fitted, odd ones measured)",
+    out = []
+    for k, d in enumerate(data):
+        edges = np.quantile(d.s, np.linspace(0, 1, CHUNKS + 1))
+        chunk = np.clip(np.searchsorted(edges, d.s, side="right") - 1, 0, CHUNKS - 1)
+        out.append(dataclasses.replace(d, calibration=chunk % 2 == k % 2))
+    runs = "one run" if len(data) == 1 else f"each of {len(data)} runs"
+    return out, (
+        f"alternate stretches of {runs} ({CHUNKS} stretches of equal length, "
+        "every other one fitted and the others measured)"
     )
 
 
-def gap(pred: Prediction, data: list[Data], which: str) -> float:
+def gap(preds: list[Prediction], data: list[Data], which: str) -> float:
     """RMS over time of measured - predicted feed (mm/min) on the calibration, held-out or
     all data."""
     sq, n = 0.0, 0.0
@@ -221,7 +247,7 @@ def gap(pred: Prediction, data: list[Data], which: str) -> float:
         )
         if not sel.any():
             continue
-        r = d.v[sel] - pred.speed_at(d.s[sel])
+        r = d.v[sel] - preds[d.case].speed_at(d.s[sel])
         w = d.weight[sel]
         sq += float(np.sum(w * r * r))
         n += float(w.sum())
@@ -238,19 +264,24 @@ def _grid(p: Param, count: int) -> NDArray[np.float64]:
     return g
 
 
+def predict_all(nc: Ncperf, tps: list[ToolPath], setup: Setup) -> list[Prediction]:
+    """The prediction of ``setup`` for every program."""
+    return [predict(nc, tp, setup) for tp in tps]
+
+
 def fit(
-    nc: Ncperf, tp: ToolPath, base: Setup, eff: Effect, data: list[Data]
-) -> tuple[dict[str, float], Prediction]:
+    nc: Ncperf, tps: list[ToolPath], base: Setup, eff: Effect, data: list[Data]
+) -> tuple[dict[str, float], list[Prediction]]:
     """Parameters of ``eff`` (on top of ``base``) minimising the calibration gap."""
     m = base.machine
     defaults = eff.defaults(m)
-    cache: dict[tuple, tuple[float, Prediction]] = {}
+    cache: dict[tuple, tuple[float, list[Prediction]]] = {}
 
     def score(values: dict[str, float]) -> float:
         key = tuple(round(values[p.name], 12) for p in eff.params)
         if key not in cache:
-            pred = predict(nc, tp, eff.apply(base, values))
-            cache[key] = (gap(pred, data, "calibration"), pred)
+            preds = predict_all(nc, tps, eff.apply(base, values))
+            cache[key] = (gap(preds, data, "calibration"), preds)
         return cache[key][0]
 
     if not eff.params:
@@ -261,7 +292,8 @@ def fit(
         p = params[0]
         candidates = [{p.name: float(x)} for x in _grid(p, GRID_1D)]
     else:
-        grids = [_grid(p, GRID_2D) for p in params]
+        per = GRID_2D if len(params) == 2 else GRID_ND
+        grids = [_grid(p, per) for p in params]
         mesh = np.meshgrid(*grids, indexing="ij")
         candidates = [
             dict(zip([p.name for p in params], map(float, vals), strict=True))
@@ -274,7 +306,7 @@ def fit(
     # (in log space for log parameters) every round.
     brackets = {}
     for p in params:
-        grid = _grid(p, GRID_1D if len(params) == 1 else GRID_2D)
+        grid = _grid(p, GRID_1D if len(params) == 1 else GRID_2D if len(params) == 2 else GRID_ND)
         k = int(np.argmin(np.abs(grid - best[p.name])))
         brackets[p.name] = (float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)]))
     for _ in range(REFINE):
@@ -331,12 +363,12 @@ def _features(tp: ToolPath, pred: Prediction, moves: NDArray[np.int64]) -> str:
     return "long straight"
 
 
-def gap_zones(
-    tp: ToolPath, pred: Prediction, data: list[Data], count: int = 10
-) -> tuple[GapZone, ...]:
+def gap_zones(preds: list[Prediction], data: list[Data], count: int = 10) -> tuple[GapZone, ...]:
     """Where |measured - predicted| exceeds GAP_SHARE of F, worst (most seconds) first."""
     zones = []
     for d in data:
+        pred = preds[d.case]
+        tp = pred.toolpath
         vp = pred.speed_at(d.s)
         r = d.v - vp
         big = np.abs(r) > GAP_SHARE * d.feed
@@ -361,6 +393,7 @@ def gap_zones(
                     s_start=float(d.s[sel][0]),
                     s_end=float(d.s[sel][-1]),
                     feature=_features(tp, pred, mv),
+                    program=tp.source,
                     gap_rms=float(np.sqrt(np.mean(r[sel] ** 2)) * PER_MIN),
                     time_s=float(dt),
                 )
@@ -379,19 +412,40 @@ def diagnose(
     effects: dict[str, Effect],
 ) -> Diagnosis:
     """The diagnosis of one program against its aligned traces (see the module docstring)."""
-    data = [resample(tp, al, lab) for al, lab in zip(alignments, labels, strict=True)]
+    return diagnose_cases(nc, [(tp, alignments, labels)], base, baseline, effects)
+
+
+def diagnose_cases(
+    nc: Ncperf,
+    cases: list[tuple[ToolPath, list[Alignment], list[str]]],
+    base: Setup,
+    baseline: str,
+    effects: dict[str, Effect],
+) -> Diagnosis:
+    """The diagnosis of several programs, each with its aligned traces, on one machine:
+    effects are fitted on some traces and measured on the others (see the module docstring)."""
+    tps = [tp for tp, _, _ in cases]
+    data = [
+        resample(tp, al, lab, case=k)
+        for k, (tp, als, labs) in enumerate(cases)
+        for al, lab in zip(als, labs, strict=True)
+    ]
     data, held_out = split(data)
-    before = predict(nc, tp, base)
+    before = predict_all(nc, tps, base)
     g_before_all = gap(before, data, "all")
     g_before = gap(before, data, "held_out")
     results = []
-    fitted: dict[str, tuple[dict[str, float], Prediction]] = {}
+    fitted: dict[str, tuple[dict[str, float], list[Prediction]]] = {}
     for name, eff in effects.items():
-        params, pred = fit(nc, tp, base, eff, data)
-        fitted[name] = (params, pred)
+        params, preds = fit(nc, tps, base, eff, data)
+        fitted[name] = (params, preds)
         results.append(
             EffectResult(
-                name, params, g_before, gap(pred, data, "held_out"), gap(pred, data, "calibration")
+                name,
+                params,
+                g_before,
+                gap(preds, data, "held_out"),
+                gap(preds, data, "calibration"),
             )
         )
     results.sort(key=lambda r: r.held_out_gap_after)
@@ -399,44 +453,44 @@ def diagnose(
 
     chosen: list[str] = []
     chosen_params: dict[str, dict[str, float]] = {}
-    current, current_pred = base, before
+    current, current_preds = base, before
     if best is not None:
         chosen.append(best)
         chosen_params[best] = fitted[best][0]
         current = effects[best].apply(base, fitted[best][0])
-        current_pred = fitted[best][1]
-        g_now = gap(current_pred, data, "held_out")
+        current_preds = fitted[best][1]
+        g_now = gap(current_preds, data, "held_out")
         while len(chosen) < MAX_CHOSEN:
             trials = []
             for r in results:
                 if r.name in chosen:
                     continue
-                params, pred = fit(nc, tp, current, effects[r.name], data)
-                trials.append((gap(pred, data, "held_out"), r.name, params, pred))
+                params, preds = fit(nc, tps, current, effects[r.name], data)
+                trials.append((gap(preds, data, "held_out"), r.name, params, preds))
             if not trials:
                 break
-            g_new, name, params, pred = min(trials, key=lambda x: x[0])
+            g_new, name, params, preds = min(trials, key=lambda x: x[0])
             if g_now <= 0 or (g_now - g_new) / g_now < ADD_SHARE:
                 break
             chosen.append(name)
             chosen_params[name] = params
             current = effects[name].apply(current, params)
-            current_pred, g_now = pred, g_new
+            current_preds, g_now = preds, g_new
     return Diagnosis(
         baseline=baseline,
         held_out=held_out,
         gap_rms_before=g_before_all,
-        zones=gap_zones(tp, before, data),
+        zones=gap_zones(before, data),
         effects=tuple(results),
         best_effect=best,
         chosen=tuple(chosen),
         chosen_params=chosen_params,
-        gap_rms_after=gap(current_pred, data, "all"),
-        zones_after=gap_zones(tp, current_pred, data),
-        alignments=tuple(alignments),
+        gap_rms_after=gap(current_preds, data, "all"),
+        zones_after=gap_zones(current_preds, data),
+        alignments=tuple(al for _, als, _ in cases for al in als),
         data=tuple(data),
-        before=before,
-        after=current_pred,
+        befores=tuple(before),
+        afters=tuple(current_preds),
     )
 
 

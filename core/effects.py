@@ -28,6 +28,7 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
+from core import geometry as g
 from core.errors import MachineError, UsageError
 from core.machine import Machine
 from core.toolpath import ToolPath
@@ -80,6 +81,8 @@ class Setup:
         Extra per-block feed limits (inf where none).
     compression : tuple (max_angle rad, max_length mm) or None
     servo_tau, filter_window : float, s
+    end_factor, arc_factor : float
+        Shares of the tangential acceleration used on the program's last block and on arcs.
     """
 
     machine: Machine
@@ -91,6 +94,8 @@ class Setup:
     compression: tuple[float, float] | None = None
     servo_tau: float = 0.0
     filter_window: float = 0.0
+    end_factor: float = 1.0
+    arc_factor: float = 1.0
 
     def replace(self, **changes: object) -> Setup:
         return dataclasses.replace(self, **changes)
@@ -167,3 +172,35 @@ def scale_machine(
         max_jerk=machine.max_jerk * jerk,
         max_feed=machine.max_feed * feed,
     )
+
+
+def arc_caps(tp: ToolPath, machine: Machine, *, jerk: bool = True) -> NDArray[np.float64]:
+    """(n,) centripetal feed limit of every programmed arc (mm/s), inf elsewhere.
+
+    On an arc of radius R at speed v the normal acceleration is v^2 / R and the jerk
+    v^3 / R^2 (the paper's eq. 2-3 for model 1's arc). Per axis, as in model 1:
+    v <= min_k sqrt(f A_k R / n_k) (and cbrt(J_k R^2 / t_k) with ``jerk``), with n_k and t_k
+    the axis's largest share of the normal and of the tangent over the arc and f the
+    machine's normal-acceleration share.
+    """
+    out = np.full(tp.n, np.inf)
+    a = np.flatnonzero(tp.is_arc)
+    if a.size == 0:
+        return out
+    n = tp.normal[a]
+    u0 = g.unit(g.radial(tp.start[a], tp.center[a], n))
+    ccw = (tp.kind[a] == 3)[:, None]
+    w0 = np.where(ccw, np.cross(n, u0), -np.cross(n, u0))
+    share_n = g.max_share(u0, w0, tp.sweep[a][:, None])
+    radius = 1.0 / np.abs(tp.curvature[a])
+    acc = machine.max_acceleration * machine.normal_acceleration_factor
+    with np.errstate(divide="ignore", invalid="ignore"):
+        v = np.where(share_n > 0, np.sqrt(acc * radius[:, None] / share_n), np.inf).min(axis=1)
+        if jerk:
+            share_t = tp.axis_share[a]
+            v_j = np.where(
+                share_t > 0, np.cbrt(machine.max_jerk * radius[:, None] ** 2 / share_t), np.inf
+            )
+            v = np.minimum(v, v_j.min(axis=1))
+    out[a] = v
+    return out

@@ -43,6 +43,8 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
             "servo_lag",
             "jerk_filter",
             "path_compression",
+            "last_block_acceleration",
+            "arc_acceleration",
         )
     ),
 )

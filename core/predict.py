@@ -210,5 +210,11 @@ def predict(nc: Ncperf, tp: ToolPath, setup: Setup) -> Prediction:
             )
         indicators = kept
     ev = combine(tp2, m, indicators)
-    profile = build_profile(ev, lookahead=setup.lookahead) if setup.ramps else None
+    profile = (
+        build_profile(
+            ev, lookahead=setup.lookahead, end_factor=setup.end_factor, arc_factor=setup.arc_factor
+        )
+        if setup.ramps
+        else None
+    )
     return Prediction(setup=setup, evaluation=ev, profile=profile)

@@ -27,6 +27,8 @@ NAMES = [
     "servo_lag",
     "jerk_filter",
     "path_compression",
+    "last_block_acceleration",
+    "arc_acceleration",
 ]
 
 

@@ -20,4 +20,6 @@ MODULES = (
     "plugins.effects.servo_lag",
     "plugins.effects.jerk_filter",
     "plugins.effects.path_compression",
+    "plugins.effects.last_block_acceleration",
+    "plugins.effects.arc_acceleration",
 )

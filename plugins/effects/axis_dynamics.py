@@ -1,7 +1,8 @@
-"""axis_dynamics: the axes' acceleration and jerk differ from the machine file.
+"""axis_dynamics: the axes' limits differ from the machine file.
 
-Parameters: ``accel_scale`` and ``jerk_scale`` (0.25-4), multiplying every axis's
-acceleration and jerk -- in the corner and curvature limits and in the ramps alike.
+Parameters: ``accel_scale``, ``jerk_scale`` and ``feed_scale`` (0.25-4), multiplying every
+axis's acceleration, jerk and maximum feed -- in the corner and curvature limits, the blocks'
+feed limits, the rapids and the ramps alike.
 """
 
 from __future__ import annotations
@@ -12,7 +13,9 @@ from core.effects import Effect, Param, scale_machine
 
 def _apply(setup, p):
     return setup.replace(
-        machine=scale_machine(setup.machine, accel=p["accel_scale"], jerk=p["jerk_scale"])
+        machine=scale_machine(
+            setup.machine, accel=p["accel_scale"], jerk=p["jerk_scale"], feed=p["feed_scale"]
+        )
     )
 
 
@@ -21,9 +24,10 @@ EFFECT = Effect(
     params=(
         Param("accel_scale", 0.25, 4.0, 1.0, log=True),
         Param("jerk_scale", 0.25, 4.0, 1.0, log=True),
+        Param("feed_scale", 0.25, 4.0, 1.0, log=True),
     ),
     apply=_apply,
-    doc="per-axis acceleration and jerk differ",
+    doc="per-axis acceleration, jerk and feed limits differ",
 )
 
 

@@ -1,8 +1,9 @@
 """normal_acceleration_factor: only a share of A is used for normal acceleration.
 
-On corner blends (model 1's sqrt(A R)) and on arcs capped by their centripetal limit the
-controller keeps part of the acceleration in reserve (LinuxCNC 2.9 uses (sqrt(3)/2) a on
-blends). Parameter: ``factor`` (0.2-1).
+On corner blends (model 1's sqrt(A R)) and on programmed arcs the controller keeps part of the
+acceleration in reserve: corners run at sqrt(f A R) and arcs are capped at their centripetal
+limit sqrt(f A R) (:func:`core.effects.arc_caps`). LinuxCNC 2.9 uses (sqrt(3)/2) a on blends
+and arcs. Parameter: ``factor`` (0.2-1).
 """
 
 from __future__ import annotations
@@ -10,13 +11,20 @@ from __future__ import annotations
 import dataclasses
 
 from core import hookimpl
-from core.effects import Effect, Param
+from core.effects import Effect, Param, arc_caps
+
+
+def _caps(tp, machine):
+    return arc_caps(tp, machine, jerk=False)
+
+
+_caps.indicator = "normal_acceleration_factor"
+_caps.label = "centripetal limit"
 
 
 def _apply(setup, p):
-    return setup.replace(
-        machine=dataclasses.replace(setup.machine, normal_acceleration_factor=p["factor"])
-    )
+    machine = dataclasses.replace(setup.machine, normal_acceleration_factor=p["factor"])
+    return setup.replace(machine=machine, element_caps=setup.element_caps + (_caps,))
 
 
 EFFECT = Effect(
