@@ -1,0 +1,60 @@
+"""The virtual machine without effect against ncperf's predicted cycle time, and its speed.
+
+Not a test: ``PYTHONPATH=.:benchmarks python benchmarks/vm/agreement.py [--all]`` from the
+repository root. Prints, for the example programs on the ``linuxcnc-sim`` and
+``siemens-840d`` presets, the virtual machine's cycle time (1 ms cycles), ncperf's
+(``core.profile``), their difference, and the virtual machine's cycles per second of wall
+time. ``--all`` adds every example and the programs of ../shared/data/linuxcnc/suite.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+import time
+from pathlib import Path
+
+from core import Ncperf, load_preset
+from core.profile import build_profile
+from vm.virtual_machine import simulate
+
+ROOT = Path(__file__).resolve().parents[2]
+PROGRAMS = ("fig1_polygons_F4000", "fig3_semicircle_spiral", "fig4_points_d1", "zlevel_cavity")
+PRESETS = ("linuxcnc-sim", "siemens-840d")
+
+
+def main(argv: list[str] | None = None) -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--all", action="store_true", help="every example and the LinuxCNC suite")
+    args = ap.parse_args(argv)
+    files = [ROOT / "examples" / f"{p}.ngc" for p in PROGRAMS]
+    if args.all:
+        files = sorted((ROOT / "examples").glob("*.ngc"))
+        files += sorted((ROOT.parent / "shared" / "data" / "linuxcnc" / "suite").glob("*.ngc"))
+    nc = Ncperf()
+    print(
+        "| program | preset | moves | VM [s] | ncperf [s] | difference | VM wall [s] | cycles/s |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
+    worst = 0.0
+    for f in files:
+        tp = nc.extract(str(f))
+        for preset in PRESETS:
+            m = load_preset(preset)
+            t0 = time.perf_counter()
+            tr = simulate(tp, m, ncperf=nc)
+            wall = time.perf_counter() - t0
+            predicted = build_profile(nc.evaluate(tp, m)).cycle_time
+            diff = tr.cycle_time / predicted - 1.0
+            worst = max(worst, abs(diff))
+            print(
+                f"| {f.stem} | {preset} | {tp.n} | {tr.cycle_time:.3f} | {predicted:.3f} | "
+                f"{100 * diff:+.2f} % | {wall:.2f} | {tr.t.size / wall:,.0f} |",
+                flush=True,
+            )
+    print(f"\nlargest difference: {100 * worst:.2f} %")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
