@@ -9,10 +9,11 @@
   start of its block plus the distance the feed covered since the block began, within the
   block.
 
-The measured feed is the trace's own where it has one, else the derivative of the arc length
-over time, lightly smoothed. Alignment quality -- how far the samples are from the path, how
-much of the path the trace covers -- is measured and stated, so that a trace of another
-program, or in other units, is reported as such rather than diagnosed.
+The measured feed is the trace's own where it has one and it agrees with the positions,
+else the speed of the positions (chords over a few samples). Alignment quality -- how far
+the samples are from the path, how much of the path the trace covers -- is measured and
+stated, so that a trace of another program, or in other units, is reported as such rather
+than diagnosed.
 """
 
 from __future__ import annotations
@@ -40,6 +41,9 @@ FAR = 0.5
 #: covers less than MIN_COVERAGE of the program's feed length.
 MAX_FAR_SHARE = 0.2
 MIN_COVERAGE = 0.5
+#: How far behind its program line's move a sample may be (mm): actual positions lag the
+#: setpoint whose line the controller reports (v tau: 10 mm at 20 m/min and 30 ms).
+LAG_BACK = 10.0
 #: Distances (mm) that count as equal when two passes of the path coincide.
 TIE = 1e-3
 #: The same in the sequential search without lines, per mm of arc length from where the
@@ -49,7 +53,7 @@ SEQ_TIE = 1e-4
 DIFF_HALF = 2
 #: A trace's own feed column is used when it agrees with its positions: relative RMS
 #: difference below CONSISTENT after smoothing both over SMOOTH_S. (The LinuxCNC suite's
-#: columns agree to 0.3-0.9 %; a 10 ms servo lag on the positions alone gives 1.6-9.5 %.)
+#: columns agree to 0.01-0.3 %; a 10 ms servo lag on the positions alone gives 1.5-9.6 %.)
 CONSISTENT = 0.012
 SMOOTH_S = 0.02
 
@@ -167,11 +171,15 @@ def _project(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> tuple[NDA
                 continue
             sel = np.flatnonzero(line_of_sample == u)
             a, b = moves_of_line[u]
-            # The move of the line, or its neighbours (blends carry a neighbour's line)
-            # where one of them is nearer: the line's own move wins ties, such as a plunge
-            # back down the path of the retract before it.
+            # The move of the line, or its neighbours (blends carry a neighbour's line),
+            # or up to LAG_BACK mm behind (actual positions lag the setpoint's line) where
+            # one of them is nearer: the line's own move wins ties, such as a plunge back
+            # down the path of the retract before it.
             own = np.flatnonzero((owner >= a) & (owner <= b))
-            win = np.flatnonzero((owner >= a - 1) & (owner <= b + 1))
+            s_a = s_p[own[0]] if own.size else 0.0
+            win = np.flatnonzero(
+                ((owner >= a - 1) & (owner <= b + 1)) | ((s_p >= s_a - LAG_BACK) & (owner <= b))
+            )
             for c in range(0, sel.size, 2048):
                 part = sel[c : c + 2048]
                 k, dd = _nearest(q[part], pts[own])
@@ -261,16 +269,18 @@ def _point_at(tp: ToolPath, s: NDArray) -> NDArray:
     return points_along(tp, k, d)
 
 
-def _feed_from_s(t: NDArray, s: NDArray) -> NDArray:
-    """ds/dt by central differences over +-DIFF_HALF samples (one-sided at the ends)."""
+def _feed_from_positions(t: NDArray, q: NDArray) -> NDArray:
+    """Speed of the positions ``q`` (m, 3): chords over +-DIFF_HALF samples (one-sided at
+    the ends). The tool's own speed, also where it leaves the path (a lagging servo cuts a
+    corner, and its projection on the path jumps there)."""
     h = DIFF_HALF
     if t.size <= 2 * h:
-        return np.gradient(s, t) if t.size > 1 else np.zeros_like(s)
-    v = np.empty_like(s)
-    v[h:-h] = (s[2 * h :] - s[: -2 * h]) / (t[2 * h :] - t[: -2 * h])
-    v[:h] = (s[h : 2 * h] - s[:h]) / (t[h : 2 * h] - t[:h])
-    v[-h:] = (s[-h:] - s[-2 * h : -h]) / (t[-h:] - t[-2 * h : -h])
-    return np.maximum(v, 0.0)
+        return np.linalg.norm(np.gradient(q, t, axis=0), axis=1) if t.size > 1 else np.zeros(t.size)
+    v = np.empty(t.size)
+    v[h:-h] = g.norm(q[2 * h :] - q[: -2 * h]) / (t[2 * h :] - t[: -2 * h])
+    v[:h] = g.norm(q[h : 2 * h] - q[:h]) / (t[h : 2 * h] - t[:h])
+    v[-h:] = g.norm(q[-h:] - q[-2 * h : -h]) / (t[-h:] - t[-2 * h : -h])
+    return v
 
 
 def _smooth(x: NDArray, k: int) -> NDArray:
@@ -306,11 +316,11 @@ def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True) -> Alignment:
             s = isotonic(s_raw)
         dist = g.norm(q - _point_at(tp, s))
         method = "line and position" if trace.line is not None else "position"
-        v_pos = _feed_from_s(trace.t, s)
+        v_pos = _feed_from_positions(trace.t, q)
         v = v_pos
         if trace.v is None:
             notes.append(
-                f"feed derived from positions (arc length over time, +-{DIFF_HALF} samples)"
+                f"feed derived from positions (their speed, chords over +-{DIFF_HALF} samples)"
             )
         else:
             mismatch = _mismatch(trace.t, trace.v, v_pos)

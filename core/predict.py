@@ -11,6 +11,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from core.align import _point_at, _refine, isotonic, sample_path
 from core.effects import Setup
 from core.facade import Ncperf
 from core.indicators import Evaluation, Indicator, combine
@@ -65,29 +66,46 @@ class Prediction:
 
     @cached_property
     def _filtered(self) -> tuple[NDArray, NDArray, NDArray] | None:
-        """(t, s, v) of the motion after the time-domain effects, or None without them."""
+        """(t, s, v) of the motion as a trace of the filtered positions shows it, or None
+        without time-domain effects.
+
+        The filters act on the positions, axis by axis, as a controller's setpoint filter
+        and a position loop do: a centred moving average over ``filter_window``, then a
+        first-order lag ``servo_tau``. The result is then read as a measured trace is
+        (:mod:`core.align`): its speed is that of the filtered positions, its place on the
+        path their projection. At a corner or on an arc the filtered positions cut inside
+        the path, and their speed dips more than the filtered path speed would.
+        """
         su = self.setup
         if su.servo_tau <= 0 and su.filter_window <= 0:
             return None
-        t, s, v = self.signal(raw=True)
+        t, s, _ = self.signal(raw=True)
         dt = t[1] - t[0] if t.size > 1 else SIGNAL_DT
+        tp = self.toolpath
         # Rest before and after, long enough for the filters' tails to carry the distance.
         head = int(np.ceil(0.5 * su.filter_window / dt)) + 1
         tail = head + int(np.ceil(8.0 * su.servo_tau / dt)) + 1
-        v = np.concatenate([np.zeros(head), v, np.zeros(tail)])
-        t = (np.arange(v.size) - head) * dt + t[0]
-        if su.filter_window > 0:
-            # Setpoint smoothing: a centred moving average of the speed over the window.
-            k = max(int(round(su.filter_window / dt)), 1)
-            if k > 1:
-                v = np.convolve(v, np.ones(k) / k, mode="same")
+        s = np.concatenate([np.full(head, s[0]), s, np.full(tail, s[-1])])
+        t = (np.arange(s.size) - head) * dt + t[0]
+        pos = _point_at(tp, s)
+        k = max(int(round(su.filter_window / dt)), 1) if su.filter_window > 0 else 1
+        if k > 1:
+            kernel = np.ones(k) / k
+            pad = np.concatenate([np.repeat(pos[:1], k, 0), pos, np.repeat(pos[-1:], k, 0)])
+            pos = np.column_stack(
+                [np.convolve(pad[:, j], kernel, mode="same")[k:-k] for j in range(3)]
+            )
         if su.servo_tau > 0:
-            # First-order lag of the positions: the actual speed follows v through
-            # dv_act/dt = (v - v_act) / tau (exact discretisation per step).
             a = np.exp(-dt / su.servo_tau)
-            v = _first_order(v, a)
-        s = np.concatenate([[0.0], np.cumsum(0.5 * (v[1:] + v[:-1]) * dt)])
-        return t, s, v
+            pos = np.column_stack([_first_order(pos[:, j], a) for j in range(3)])
+        v = np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
+        # Where the filtered positions are on the path: near the setpoint of tau earlier.
+        path = _path_points(tp)
+        guess = np.interp(t - su.servo_tau, t, s)
+        for _ in range(2):
+            guess, _ = _refine(pos, guess, path)
+            guess = isotonic(guess)
+        return t, guess, v
 
     def signal(self, *, raw: bool = False) -> tuple[NDArray, NDArray, NDArray]:
         """(t, s, v) of the predicted motion sampled in time (s, mm, mm/s)."""
@@ -125,6 +143,22 @@ class Prediction:
             return self.profile.cycle_time
         tp = self.toolpath
         return float(np.sum(tp.length / self.block_speed) + tp.dwell.sum())
+
+
+_PATHS: dict[int, tuple[ToolPath, tuple]] = {}
+
+
+def _path_points(tp: ToolPath) -> tuple:
+    """The alignment's path points of ``tp`` (the last few tool paths' are kept: a fit
+    filters many predictions of one path)."""
+    hit = _PATHS.get(id(tp))
+    if hit is not None and hit[0] is tp:
+        return hit[1]
+    if len(_PATHS) >= 4:
+        _PATHS.pop(next(iter(_PATHS)))
+    path = sample_path(tp)
+    _PATHS[id(tp)] = (tp, path)
+    return path
 
 
 def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:

@@ -35,15 +35,31 @@ def zigzag(feed=100.0):
 
 
 def synthetic_trace(nc, tp, setup, dt=0.001, with_positions=True):
-    """A trace made from a prediction: what a machine with that setup would record."""
-    pred = predict(nc, tp, setup)
+    """A trace made from a prediction: what a machine with that setup would record. A servo
+    lag is applied here, to the positions axis by axis (x += (target - x) (1 - e^(-dt/tau))
+    every step), and the speed is then that of the lagged positions."""
+    tau = setup.servo_tau
+    pred = predict(nc, tp, dataclasses.replace(setup, servo_tau=0.0))
     t, s, v = pred.signal()
     from core.align import _point_at
 
-    pos = _point_at(tp, s) if with_positions else None
+    pos = _point_at(tp, s)
+    if tau > 0:
+        rest = int(8 * tau / dt)
+        pos = np.concatenate([pos, np.repeat(pos[-1:], rest, axis=0)])
+        t = np.arange(pos.shape[0]) * dt + t[0]
+        k = 1.0 - math.exp(-dt / tau)
+        lagged = pos.copy()
+        for i in range(1, pos.shape[0]):
+            lagged[i] = lagged[i - 1] + (pos[i] - lagged[i - 1]) * k
+        pos = lagged
+        v = np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
+        s = np.concatenate([s, np.full(rest, s[-1])])
     start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
     k = np.clip(np.searchsorted(start_s, s, side="right") - 1, 0, tp.n - 1)
-    return Trace(t=t - t[0], pos=pos, v=v, line=tp.line[k], source="synthetic")
+    return Trace(
+        t=t - t[0], pos=pos if with_positions else None, v=v, line=tp.line[k], source="synthetic"
+    )
 
 
 def test_isotonic_regression():
