@@ -220,10 +220,11 @@ def predict(nc: Ncperf, tp: ToolPath, setup: Setup) -> Prediction:
         )
     if setup.compression is not None:
         merged = compression_runs(tp2, *setup.compression)
-        # Blocks strictly inside a merged run (both their junctions merged) lose their
-        # block-time cap; merged junctions lose their limits.
+        # A merged run becomes one segment (a spline): its blocks lose their own block-time
+        # cap, the run as a whole gets L_run / t_int; merged junctions lose their limits.
         blocks = np.zeros(tp2.n, dtype=bool)
-        blocks[1:-1] = merged[:-1] & merged[1:]
+        blocks[:-1] |= merged
+        blocks[1:] |= merged
         kept = []
         for ind in indicators:
             if ind.at == "junction":
@@ -240,6 +241,23 @@ def predict(nc: Ncperf, tp: ToolPath, setup: Setup) -> Prediction:
                     feed=ind.feed[keep],
                     limit=ind.limit[keep],
                     values={k: np.asarray(v)[keep] for k, v in ind.values.items()},
+                )
+            )
+        idx = np.flatnonzero(blocks)
+        if idx.size:
+            # Runs: consecutive blocks joined by merged junctions.
+            starts = np.ones(idx.size, dtype=bool)
+            starts[1:] = ~((idx[1:] == idx[:-1] + 1) & merged[idx[:-1]])
+            run = np.cumsum(starts) - 1
+            run_len = np.bincount(run, weights=tp2.length[idx])
+            kept.append(
+                Indicator(
+                    name="ncu_capacity",
+                    at="element",
+                    index=idx,
+                    feed=run_len[run] / m.interpolation_time,
+                    limit=np.zeros(idx.size, dtype=np.int64),
+                    labels=("block time (compressed run)",),
                 )
             )
         indicators = kept

@@ -474,15 +474,37 @@ def _passes(
     return np.sqrt(np.maximum(np.minimum(np.minimum(fwd, bwd), b2), 0.0))
 
 
-def _window_caps(b: NDArray, length: NDArray, a_dn: NDArray, lookahead: int | None) -> NDArray:
+def stop_speed(dist: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
+    """The highest speed (mm/s) from which a jerk-limited stop takes at most ``dist`` mm.
+
+    A stop from v takes v T / 2 with T = 2 sqrt(v / J) while v < A^2 / J, so
+    v = (d^2 J)^(1/3); beyond, T = v / A + A / J and v^2 / A + v A / J = 2 d gives
+    v = (A / 2) (sqrt(A^2 / J^2 + 8 d / A) - A / J); sqrt(2 A d) without a jerk limit.
+    """
+    d = np.maximum(np.asarray(dist, dtype=np.float64), 0.0)
+    a = np.asarray(acc, dtype=np.float64)
+    j = np.asarray(jerk, dtype=np.float64)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        short = np.cbrt(d * d * j)
+        r = a / j
+        long = 0.5 * a * (np.sqrt(r * r + 8.0 * d / a) - r)
+        v = np.where(short <= a * r, short, long)
+    return np.where(np.isfinite(j), v, np.sqrt(2.0 * a * d))
+
+
+def _window_caps(
+    b: NDArray, length: NDArray, acc: NDArray, jerk: NDArray, lookahead: int | None
+) -> NDArray:
     """Boundary caps of a planner that sees ``lookahead`` blocks: from every boundary it must
-    be able to stop by the end of the blocks it sees."""
+    be able to stop, jerk-limited, by the end of the blocks it sees (at the limits of the
+    first of them)."""
     n = length.size
     if lookahead is None or lookahead >= n:
         return b
-    w_dn = np.concatenate([[0.0], np.cumsum(2.0 * a_dn * length)])
+    s = np.concatenate([[0.0], np.cumsum(length)])
     ahead = np.minimum(np.arange(n + 1) + int(lookahead), n)
-    return np.minimum(b, np.sqrt(np.maximum(w_dn[ahead] - w_dn, 0.0)))
+    k = np.minimum(np.arange(n + 1), n - 1)
+    return np.minimum(b, stop_speed(s[ahead] - s, acc[k], jerk[k]))
 
 
 def _moves(
@@ -604,7 +626,9 @@ def build_profile(
     step_up = np.zeros(tp.n)
     step_dn = np.zeros(tp.n)
     for r in range(max(rounds, 1)):
-        v = _passes(_window_caps(b, length, a_dn, lookahead), length, a_up, a_dn, h_start, h_end)
+        v = _passes(
+            _window_caps(b, length, acc, jerk, lookahead), length, a_up, a_dn, h_start, h_end
+        )
         v0, peak, v1, time, d_cr = _moves(
             v, length, cap, a_up, a_dn, h_start, h_end, r_start, r_end
         )
@@ -628,7 +652,7 @@ def build_profile(
         a_up, a_dn = new_up, new_dn
         if change < JERK_CONVERGED:
             v = _passes(
-                _window_caps(b, length, a_dn, lookahead), length, a_up, a_dn, h_start, h_end
+                _window_caps(b, length, acc, jerk, lookahead), length, a_up, a_dn, h_start, h_end
             )
             v0, peak, v1, time, d_cr = _moves(
                 v, length, cap, a_up, a_dn, h_start, h_end, r_start, r_end

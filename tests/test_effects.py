@@ -120,6 +120,19 @@ def test_lookahead_depth(nc, effects):
     assert run(nc, effects, tp, m).profile.v_peak.max() == pytest.approx(math.sqrt(50000))
 
 
+def test_lookahead_depth_with_a_jerk_limit(nc, effects):
+    """Jerk-limited stops: from v a stop takes v sqrt(v / J) while v < A^2 / J, so within
+    4 mm (four 1 mm blocks) at J 5000, A 2500: v = (16 x 5000)^(1/3) = 43.089 mm/s; at
+    J 50000 within 100 mm: v^2 / A + v A / J = 200 gives v = 647.36 mm/s."""
+    from core.profile import stop_speed
+
+    v = stop_speed([4.0, 100.0, 0.5], [2500.0, 2500.0, 2500.0], [5000.0, 50000.0, INF])
+    assert v == pytest.approx([80000 ** (1 / 3), 1250 * (math.sqrt(0.0025 + 0.32) - 0.05), 50.0])
+    tp = path([{"end": (i + 1.0, 0, 0)} for i in range(40)], feed=100.0)
+    p = run(nc, effects, tp, machine(t_int=0.0001), "lookahead_depth", blocks=4)
+    assert p.profile.v_entry[10:30] == pytest.approx(np.full(20, 80000 ** (1 / 3)))
+
+
 def test_servo_lag_and_jerk_filter_delay_the_speed(nc, effects):
     """Lag and smoothing keep the distance but slow the speed's rise: at 20 ms into a
     ramp to 100 mm/s (A 2500: raw 50 mm/s) the lagged speed (tau 20 ms) is lower."""
@@ -137,14 +150,27 @@ def test_servo_lag_and_jerk_filter_delay_the_speed(nc, effects):
             assert v[k] == pytest.approx(2500 * (0.02 - 0.02 * (1 - math.exp(-1))), abs=0.8)
 
 
-def test_path_compression_lifts_the_block_cap_inside_runs(nc, effects):
-    """20 collinear 1 mm blocks at 10 m/min (capped at 83.333 mm/s by t_int 12 ms):
-    compressed (blocks < 3 mm, angles < 5 deg), the 18 inner blocks keep F; the ends stay capped."""
+def test_path_compression_merges_runs_into_one_segment(nc, effects):
+    """20 collinear 1 mm blocks at 10 m/min (each capped at 1 / 0.012 = 83.333 mm/s by t_int
+    12 ms): compressed (blocks < 3 mm, angles < 5 deg) they are one 20 mm segment, capped at
+    20 / 0.012 = 1666.7 mm/s, so every block keeps F. 20 blocks of 0.05 mm: one 1 mm
+    segment, 83.333 mm/s on all of them (uncompressed: 0.05 / 0.012 = 4.1667 mm/s); with
+    a 1 deg turn between the 10th and 11th, max_angle 0.5 deg splits it in two 0.5 mm
+    segments at 41.667 mm/s."""
     tp = path([{"end": (i + 1, 0, 0)} for i in range(20)], feed=10000 / 60)
     p = run(nc, effects, tp, machine(), "path_compression", max_angle=5.0, max_length=3.0)
-    ef = p.evaluation.element_feed
-    assert np.allclose(ef[1:-1], 10000 / 60)
-    assert ef[0] == pytest.approx(1 / 0.012) and ef[-1] == pytest.approx(1 / 0.012)
+    assert np.allclose(p.evaluation.element_feed, 10000 / 60)
+    tp = path([{"end": (0.05 * (i + 1), 0, 0)} for i in range(20)], feed=10000 / 60)
+    p = run(nc, effects, tp, machine(), "path_compression", max_angle=5.0, max_length=3.0)
+    assert np.allclose(p.evaluation.element_feed, 1 / 0.012)
+    a = math.radians(1.0)
+    bent = [(0.05 * (i + 1), 0, 0) for i in range(10)]
+    bent += [
+        (0.5 + 0.05 * (i + 1) * math.cos(a), 0.05 * (i + 1) * math.sin(a), 0) for i in range(10)
+    ]
+    tp = path([{"end": e} for e in bent], feed=10000 / 60)
+    p = run(nc, effects, tp, machine(), "path_compression", max_angle=0.5, max_length=3.0)
+    assert np.allclose(p.evaluation.element_feed, 0.5 / 0.012)
 
 
 def test_parameters_are_bound_checked(effects):
