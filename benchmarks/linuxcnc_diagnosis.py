@@ -79,7 +79,7 @@ def main() -> int:
             )
         if d.chosen:
             print("  fold into the machine file:")
-            for line in toml_snippet(d).splitlines():
+            for line in toml_snippet(d, machine, effects).splitlines():
                 print("    " + line)
     if args.per_program:
         print()

@@ -262,14 +262,19 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     d = diagnose(nc, tp, alignments, labels, base, args.baseline, effects)
     print(
         report(
-            d, program=tp.source, machine=machine.name + note, labels=labels, effects=nc.effects()
+            d,
+            program=tp.source,
+            machine=machine.name + note,
+            labels=labels,
+            effects=nc.effects(),
+            machine_file=machine,
         )
     )
     if args.json:
         import json
 
         with atomic_writer(args.json) as fh:
-            json.dump(to_json(d), fh, indent=1)
+            json.dump(to_json(d, machine, nc.effects()), fh, indent=1)
             fh.write("\n")
         print(f"  json             {args.json}")
     if args.svg:

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Mapping
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -31,6 +32,7 @@ from core.align import Alignment
 from core.annotations import Annotations
 from core.effects import Effect, Param, Setup
 from core.facade import Ncperf
+from core.machine import Machine
 from core.predict import Prediction, predict
 from core.toolpath import ToolPath
 
@@ -274,7 +276,7 @@ def fit(
 ) -> tuple[dict[str, float], list[Prediction]]:
     """Parameters of ``eff`` (on top of ``base``) minimising the calibration gap."""
     m = base.machine
-    defaults = eff.defaults(m)
+    defaults = eff.start(m)
     cache: dict[tuple, tuple[float, list[Prediction]]] = {}
 
     def score(values: dict[str, float]) -> float:
@@ -505,19 +507,34 @@ def _fmt_params(params: dict[str, float], eff: Effect) -> str:
     )
 
 
-def toml_snippet(d: Diagnosis) -> str:
-    """The machine-file tables that make the chosen effects part of the model."""
+def toml_snippet(
+    d: Diagnosis, machine: Machine | None = None, effects: Mapping[str, Effect] | None = None
+) -> str:
+    """The machine-file tables that make the chosen effects part of the model (for a scale
+    the machine already folds in, the product of the two)."""
     out = []
     for name in d.chosen:
+        values = dict(d.chosen_params[name])
+        eff = effects.get(name) if effects is not None else None
+        if machine is not None and eff is not None and eff.relative:
+            before = eff.folded(machine)
+            values = {k: v * before.get(k, 1.0) for k, v in values.items()}
         out.append(f"[effects.{name}]")
-        out.extend(f"{k} = {v:.6g}" for k, v in d.chosen_params[name].items())
+        out.extend(f"{k} = {v:.6g}" for k, v in values.items())
     return "\n".join(out)
 
 
 def report(
-    d: Diagnosis, *, program: str, machine: str, labels: list[str], effects: dict[str, Effect]
+    d: Diagnosis,
+    *,
+    program: str,
+    machine: str,
+    labels: list[str],
+    effects: dict[str, Effect],
+    machine_file: Machine | None = None,
 ) -> str:
-    """The terminal report of ``ncperf diagnose``."""
+    """The terminal report of ``ncperf diagnose`` (``machine_file``: the machine whose file
+    the suggested tables go into)."""
     lines = [f"ncperf diagnose: {program} on {machine} (baseline: {d.baseline})"]
     for lab, al in zip(labels, d.alignments, strict=True):
         lines.append(
@@ -534,13 +551,15 @@ def report(
     lines.append(
         "  effects          fitted on the calibration data; gap on the held-out data (mm/min):"
     )
+    params = [_fmt_params(r.params, effects[r.name]) for r in d.effects]
+    width = max([len("parameters"), *map(len, params)])
     lines.append(
-        f"    {'#':>2s}  {'effect':28s} {'parameters':34s} {'before':>8s} "
+        f"    {'#':>2s}  {'effect':28s} {'parameters':{width}s} {'before':>8s} "
         f"{'after':>8s} {'removed':>8s}"
     )
-    for k, r in enumerate(d.effects, start=1):
+    for k, (r, ps) in enumerate(zip(d.effects, params, strict=True), start=1):
         lines.append(
-            f"    {k:2d}  {r.name:28s} {_fmt_params(r.params, effects[r.name]):34s} "
+            f"    {k:2d}  {r.name:28s} {ps:{width}s} "
             f"{r.held_out_gap_before:8.1f} {r.held_out_gap_after:8.1f} "
             f"{r.removed * 100:7.0f}%"
         )
@@ -558,14 +577,16 @@ def report(
     lines.append(f"  gap after        {d.gap_rms_after:.1f} mm/min")
     if d.chosen:
         lines += _zone_table("  where it remains", d.zones_after[:5])
-        lines.append("  to model it      add to the machine file:")
-        lines += ["                   " + t for t in toml_snippet(d).splitlines()]
+        lines.append("  to model it      add to the machine file (or replace there):")
+        lines += [
+            "                   " + t for t in toml_snippet(d, machine_file, effects).splitlines()
+        ]
     return "\n".join(lines)
 
 
 def _zone_table(title: str, zones: tuple[GapZone, ...]) -> list[str]:
     if not zones:
-        return [f"{title:17s}nowhere beyond {GAP_SHARE:.0%} of F"]
+        return [f"{title:18s} nowhere beyond {GAP_SHARE:.0%} of F"]
     out = [
         f"{title}:",
         f"    {'lines':13s} {'arc length [mm]':>19s} {'feature':20s} "
@@ -580,7 +601,9 @@ def _zone_table(title: str, zones: tuple[GapZone, ...]) -> list[str]:
     return out
 
 
-def to_json(d: Diagnosis) -> dict:
+def to_json(
+    d: Diagnosis, machine: Machine | None = None, effects: Mapping[str, Effect] | None = None
+) -> dict:
     """The JSON report (gaps in mm/min, times in s: > 0 the machine is slower)."""
 
     def zone(z: GapZone) -> dict:
@@ -626,4 +649,5 @@ def to_json(d: Diagnosis) -> dict:
         },
         "gap_rms_after": round(d.gap_rms_after, 3),
         "zones_after": [zone(z) for z in d.zones_after],
+        "machine_file_tables": toml_snippet(d, machine, effects),
     }

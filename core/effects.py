@@ -113,12 +113,32 @@ class Effect:
         How the effect changes the prediction.
     doc : str
         One line: what the controller does.
+    relative : bool
+        The parameters multiply what the setup already has (a scale): fitted on a machine
+        that already folds the effect in, they give the further factor. Otherwise they set
+        a value, and a fit starts from the machine's own.
     """
 
     name: str
     params: tuple[Param, ...]
     apply: Callable[[Setup, Mapping[str, float]], Setup] = field(repr=False)
     doc: str = ""
+    relative: bool = False
+
+    def folded(self, machine: Machine) -> dict[str, float]:
+        """The parameters the machine's ``[effects.NAME]`` table gives (defaults filled in),
+        or {} when it has none."""
+        for name, params, _ in machine.effects:
+            if name == self.name:
+                return self.defaults(machine) | {k: float(v) for k, v in params.items()}
+        return {}
+
+    def start(self, machine: Machine) -> dict[str, float]:
+        """Where a fit starts, the values that change nothing on top of ``machine``: the
+        defaults, or the machine's folded values for an effect that sets them."""
+        if self.relative:
+            return self.defaults(machine)
+        return self.defaults(machine) | self.folded(machine)
 
     def defaults(self, machine: Machine) -> dict[str, float]:
         return {p.name: p.default_for(machine) for p in self.params}

@@ -164,6 +164,34 @@ def test_two_runs_hold_one_out(nc):
     assert d.best_effect == "feed_override"
 
 
+def test_a_machine_with_folded_effects_starts_from_them(nc):
+    """The machine file folds in feed_override 0.9 and arc_acceleration 0.5; the machine
+    actually runs at 0.72 of F (0.9 x 0.8) with the same arcs. The fit finds the further
+    scale 0.8 and suggests 0.72 for the file. On a trace of the folded machine itself,
+    nothing stands out and arc_acceleration stays at its folded 0.5 (not reset to 1)."""
+    from core.diagnose import toml_snippet
+    from core.effects import setup_for
+
+    tp = zigzag()
+    folded = (("feed_override", {"scale": 0.9}, 1), ("arc_acceleration", {"factor": 0.5}, 2))
+    m = dataclasses.replace(machine(jerk=(INF, INF, INF)), effects=folded)
+    eff = nc.effects()
+    base = setup_for(m, eff)
+    assert base.feed_scale == pytest.approx(0.9) and base.arc_factor == 0.5
+    truth = eff["feed_override"].apply(base, {"scale": 0.8})
+    d = diagnose(nc, tp, [align(tp, synthetic_trace(nc, tp, truth))], ["t"], base, "profile", eff)
+    assert d.best_effect == "feed_override"
+    assert d.chosen_params["feed_override"]["scale"] == pytest.approx(0.8, rel=0.01)
+    assert "scale = 0.72" in toml_snippet(d, m, eff)
+    assert eff["arc_acceleration"].start(m) == {"factor": 0.5}
+    assert eff["feed_override"].start(m) == {"scale": 1.0}
+    d = diagnose(nc, tp, [align(tp, synthetic_trace(nc, tp, base))], ["t"], base, "profile", eff)
+    assert d.best_effect is None
+    arc = next(r for r in d.effects if r.name == "arc_acceleration")
+    assert arc.params["factor"] == pytest.approx(0.5, abs=0.01)
+    assert abs(arc.removed) < 0.01
+
+
 def test_csv_trace_reader_errors(nc, tmp_path):
     """CSV traces: missing columns, NaN rows and time going backwards name file and line."""
     p = tmp_path / "t.csv"

@@ -28,6 +28,7 @@ EFFECT = Effect(
     ),
     apply=_apply,
     doc="per-axis acceleration, jerk and feed limits differ",
+    relative=True,
 )
 
 

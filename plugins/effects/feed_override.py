@@ -13,6 +13,7 @@ EFFECT = Effect(
     params=(Param("scale", 0.5, 1.5, 1.0),),
     apply=lambda setup, p: setup.replace(feed_scale=setup.feed_scale * p["scale"]),
     doc="constant scale on F",
+    relative=True,
 )
 
 
