@@ -13,9 +13,11 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    even-numbered traces when there are several (other runs or programs), else alternate
    stretches of one run -- and its gap measured on the held-out data it was not fitted on.
    Effects are ranked by how much of the held-out gap they remove; the best one counts only
-   if it removes at least BEST_SHARE of it ("the model already explains this trace" is an
-   answer). Effects are then added greedily while each still removes at least ADD_SHARE of
-   what is left.
+   if it removes at least BEST_SHARE of it ("no listed effect explains the gap" is an
+   answer: the model already explains the trace, or what is left is noise or an effect
+   not in the list). Effects are then added greedily while each still removes at least
+   ADD_SHARE of what is left, and what is left is at least STOP_SHARE of the gap before
+   (below that, a further effect would be fitted to the noise of the first one's fit).
 """
 
 from __future__ import annotations
@@ -50,6 +52,7 @@ MERGE_MM = 1.0
 #: what is left.
 BEST_SHARE = 0.20
 ADD_SHARE = 0.10
+STOP_SHARE = 0.10
 MAX_CHOSEN = 4
 #: Stretches of one run used for calibration / held-out data (alternating).
 CHUNKS = 16
@@ -462,7 +465,7 @@ def diagnose_cases(
         current = effects[best].apply(base, fitted[best][0])
         current_preds = fitted[best][1]
         g_now = gap(current_preds, data, "held_out")
-        while len(chosen) < MAX_CHOSEN:
+        while len(chosen) < MAX_CHOSEN and g_now >= STOP_SHARE * g_before:
             trials = []
             for r in results:
                 if r.name in chosen:
@@ -566,13 +569,14 @@ def report(
     if d.best_effect is None:
         lines.append(
             f"  best effect      none: no effect removes {BEST_SHARE:.0%} of the held-out"
-            " gap -- the model already explains this trace"
+            " gap (what is left is noise, or an effect not in this list)"
         )
     else:
         lines.append(f"  best effect      {d.best_effect}")
         lines.append(
             f"  chosen           {' + '.join(d.chosen)} (each removing at least "
-            f"{ADD_SHARE:.0%} of what was left on held-out data)"
+            f"{ADD_SHARE:.0%} of what was left on held-out data, until less than "
+            f"{STOP_SHARE:.0%} of the gap was left)"
         )
     lines.append(f"  gap after        {d.gap_rms_after:.1f} mm/min")
     if d.chosen:
