@@ -9,22 +9,27 @@ runs are sequential and in real time, about 40 s per variant).
 Four programs of the visible suite (corners, arcs with curvature jumps, short blocks,
 line-arc-line) run on the harness's default mill with one setting changed per variant: the
 feed override, the axes' acceleration, the path tolerance the controller blends corners with
-(the program still says G64 P0.01), the servo period. The diagnosis is given the unchanged
-programs, the traces and the ``linuxcnc-sim`` preset (the default mill, with what the suite
-diagnosis folded in); it fits every effect on alternate programs and measures it on the
-others. The traces are cached in ``--cache``.
+(the program still says G64 P0.01), the servo period; and two effects LinuxCNC does not have,
+put on the unchanged machine's traces: actual positions behind a servo lag, a setpoint
+filter. The diagnosis is given the unchanged programs, the traces and the ``linuxcnc-sim``
+preset (the default mill, with what the suite diagnosis folded in); it fits every effect on
+alternate programs and measures it on the others. Then each trace is diagnosed on its own,
+as a user would. The traces are cached in ``--cache``.
 """
 
 from __future__ import annotations
 
 import argparse
 import datetime
+import math
 import re
 import shutil
 import subprocess
 import sys
 import time
 from pathlib import Path
+
+import numpy as np
 
 from core import Ncperf
 from core.align import align
@@ -42,13 +47,15 @@ PROGRAMS = (
     "05_collinear_points_f6000",
     "09_line_arc_line_f5000",
 )
+POST = ("servo_lag", "jerk_filter")
 ACCEL = [
     f"{sec}.MAX_ACCELERATION=1200"
     for sec in ("AXIS_X", "AXIS_Y", "AXIS_Z", "JOINT_0", "JOINT_1", "JOINT_2")
 ]
 ACCEL += ["TRAJ.MAX_LINEAR_ACCELERATION=1200", "TRAJ.DEFAULT_LINEAR_ACCELERATION=1200"]
 
-#: (label, effect expected, its true parameters, --set overrides, feed override, G64 P run)
+#: (label, effect expected, its true parameters, --set overrides, feed override, G64 P run);
+#: the last two are made from the unchanged machine's traces (see :func:`post_process`).
 VARIANTS = (
     ("unchanged", None, {}, [], 1.0, None),
     ("feed override 80 %", "feed_override", {"scale": 0.8}, [], 0.8, None),
@@ -83,7 +90,9 @@ VARIANTS = (
         ["EMCMOT.SERVO_PERIOD=4000000"],
         1.0,
         None,
-    ),
+    ),  # Effects the controller does not have, put on the unchanged machine's traces.
+    ("actual positions behind a 20 ms servo lag", "servo_lag", {"tau": 0.02}, [], 1.0, None),
+    ("setpoint smoothed over 30 ms", "jerk_filter", {"window": 0.03}, [], 1.0, None),
 )
 
 
@@ -105,6 +114,53 @@ def run(prog: Path, out: Path, sets: list[str], override: float, tol: str | None
     if r.returncode != 0:
         raise SystemExit(f"{src}: the LinuxCNC harness failed:\n{r.stderr[-2000:]}")
     Path(str(out) + ".part").rename(out)
+
+
+def post_process(src: Path, out: Path, effect: str, params: dict[str, float]) -> None:
+    """A trace of the unchanged machine with an effect LinuxCNC does not have: its positions
+    behind a first-order lag per axis (the v column stays the planner's: a recording of
+    actual positions with the commanded speed), or positions and v smoothed by a causal
+    moving average over the window (a setpoint filter after the planner)."""
+    if out.exists():
+        return
+    with open(src) as fh:
+        names = fh.readline().strip().split(",")
+    data = np.loadtxt(src, delimiter=",", skiprows=1)
+    col = {n: k for k, n in enumerate(names)}
+    dt = float(np.median(np.diff(data[:, col["t"]])))
+    pos = data[:, [col["x"], col["y"], col["z"]]]
+    v = data[:, col["v"]]
+    if effect == "servo_lag":
+        rest = int(8 * params["tau"] / dt)
+        pos = np.concatenate([pos, np.repeat(pos[-1:], rest, axis=0)])
+        a = math.exp(-dt / params["tau"])
+        out_pos = pos.copy()
+        for i in range(1, pos.shape[0]):
+            out_pos[i] = a * out_pos[i - 1] + (1 - a) * pos[i]
+        v = np.concatenate([v, np.zeros(rest)])
+    else:
+        k = int(round(params["window"] / dt))
+        pos = np.concatenate([pos, np.repeat(pos[-1:], k, axis=0)])
+        v = np.concatenate([v, np.zeros(k)])
+        kernel = np.ones(k) / k
+        pad = np.concatenate([np.repeat(pos[:1], k - 1, axis=0), pos])
+        out_pos = np.column_stack([np.convolve(pad[:, j], kernel, "valid") for j in range(3)])
+        v = np.convolve(np.concatenate([np.zeros(k - 1), v]), kernel, "valid")
+    m = out_pos.shape[0]
+    line = data[:, col["line"]]
+    line = np.concatenate([line, np.full(m - line.size, line[-1])])
+    t = data[0, col["t"]] + np.arange(m) * dt
+    table = np.column_stack([t, out_pos, v, line])
+    tmp = Path(str(out) + ".part")
+    np.savetxt(
+        tmp,
+        table,
+        delimiter=",",
+        header="t,x,y,z,v,line",
+        comments="",
+        fmt=["%.4f", "%.6f", "%.6f", "%.6f", "%.6f", "%d"],
+    )
+    tmp.rename(out)
 
 
 def main() -> int:
@@ -143,14 +199,22 @@ def main() -> int:
     )
     print("|---|---|---|---|---|---|---|---|")
     score = []
+    singles: list[list] = []
     for k, (label, effect, params, sets, override, tol) in enumerate(VARIANTS):
         t0 = time.perf_counter()
         cases = []
         for p in PROGRAMS:
             out = cache / f"v{k}_{p}.csv"
-            run(SUITE / f"{p}.ngc", out, sets, override, tol)
+            if effect in POST:
+                plain = cache / f"v0_{p}.csv"
+                run(SUITE / f"{p}.ngc", plain, [], 1.0, None)
+                post_process(plain, out, effect, params)
+            else:
+                run(SUITE / f"{p}.ngc", out, sets, override, tol)
             cases.append((tps[p], [align(tps[p], nc.read_trace(str(out)))], [p]))
         d = diagnose_cases(nc, cases, base, "profile", effects)
+        # Each program on its own, as a user diagnoses one trace.
+        singles.append([diagnose_cases(nc, [c], base, "profile", effects) for c in cases])
         wall = time.perf_counter() - t0
         named = d.best_effect or "none"
         if effect is None:
@@ -171,6 +235,30 @@ def main() -> int:
         sys.stdout.flush()
     print()
     print(f"changed setting named first: {sum(score)}/{len(score)}")
+    print()
+    print(
+        "Each program on its own (one trace: alternate stretches fitted and measured); "
+        "named first, and the share of the gap it removes:"
+    )
+    print()
+    print("| run with | " + " | ".join(PROGRAMS) + " |")
+    print("|---|" + "---|" * len(PROGRAMS))
+    hits, total = 0, 0
+    for (label, effect, *_), ds in zip(VARIANTS, singles, strict=True):
+        cells = []
+        for d in ds:
+            named = d.best_effect or "none"
+            share = f" {d.effects[0].removed:.0%}" if d.best_effect else ""
+            ok = named == (effect or "none")
+            hits += ok
+            total += 1
+            cells.append(f"{named}{share}" + ("" if ok else " (x)"))
+        print(f"| {label} | " + " | ".join(cells) + " |")
+    print()
+    print(
+        f"single traces answered as expected: {hits}/{total} ((x): not the expected effect, "
+        "or none where the change does not show on that program)"
+    )
     return 0
 
 

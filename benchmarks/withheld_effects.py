@@ -1,21 +1,23 @@
 """Does ``ncperf diagnose`` find an effect it is not told about? A confusion table.
 
-Not a test: ``PYTHONPATH=.:benchmarks python benchmarks/withheld_effects.py [--quick]``.
+Not a test: ``PYTHONPATH=.:benchmarks python benchmarks/withheld_effects.py [--seed N]
+[--draws K] [--full]`` (about 40 minutes on 2 cores with the defaults).
 
 Every case runs a set of bundled example programs on the reference virtual machine
 (``benchmarks/vm``, an interpolator independent of ``core.profile``) with **one** controller
-effect switched on at a given strength, records 1 ms traces, and hands them to the diagnosis
-without saying which effect was on. The diagnosis fits every effect it knows on alternate
-programs and measures it on the others (profile baseline, the machine's own values as the
-starting point). Reported per case: the effect ranked first, the held-out gap before and
-after the withheld effect is modelled (and the share removed), the fitted parameter against
-the true one. A control case with no effect checks that nothing is named when nothing is
-there.
+effect switched on at a random strength (seeded: the same seed gives the same cases),
+records 1 ms traces, and hands them to the diagnosis without saying which effect was on. The
+diagnosis fits every effect it knows on alternate programs and measures it on the others
+(profile baseline, the machine's own values as the starting point). Reported per case: the
+effect ranked first, the held-out gap before and after the withheld effect is modelled (and
+the share removed), the fitted parameters against the true ones; then the confusion table
+(true effect x named effect) and the summary. A control case per machine, with no effect,
+checks that nothing is named when nothing is there.
 
-Effects that a machine cannot show are skipped (a jerk scale on a machine without a jerk
-limit). An effect that leaves the traces as they were on these programs (its held-out gap
-before modelling under VISIBLE times the control's) is reported as not visible and left out
-of the score: nothing can be diagnosed from traces it did not change.
+An effect a machine cannot show is not drawn there (a jerk scale without a jerk limit). An
+effect that leaves the traces as they were on these programs (held-out gap before modelling
+under VISIBLE times the control's) is reported as not visible and left out of the score:
+nothing can be diagnosed from traces it did not change.
 """
 
 from __future__ import annotations
@@ -26,6 +28,7 @@ import datetime
 import statistics
 import sys
 import time
+from collections import Counter
 from pathlib import Path
 
 import numpy as np
@@ -34,51 +37,66 @@ from core import Ncperf
 from core.align import align
 from core.diagnose import diagnose_cases
 from core.effects import setup_for
-from core.machine import resolve_machine
+from core.machine import Machine, resolve_machine
 from core.trace import Trace
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from vm.virtual_machine import simulate  # noqa: E402
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
-#: Corners at three feeds, arcs with curvature jumps, short blocks, a mould cavity of chords.
+#: Corners at two feeds, arcs with curvature jumps, short blocks; --full adds the cavity.
 PROGRAMS = (
     "fig1_polygons_F4000",
     "fig3_semicircle_spiral",
     "fig4_points_d1",
     "fig1_polygons_F8000",
-    "zlevel_cavity",
 )
-QUICK = ("fig1_polygons_F4000", "fig3_semicircle_spiral", "fig4_points_d1", "fig1_polygons_F8000")
-
-#: (effect, parameters) cases; strengths a machine plausibly shows. None: no effect.
-CASES: tuple[tuple[str | None, dict[str, float]], ...] = (
-    (None, {}),
-    ("feed_override", {"scale": 0.8}),
-    ("feed_override", {"scale": 1.2}),
-    ("block_cycle_time", {"t_block": 0.02}),
-    ("corner_tolerance", {"tolerance": 0.05}),
-    ("corner_tolerance", {"tolerance": 0.003}),
-    ("normal_acceleration_factor", {"factor": 0.5}),
-    ("arc_feed_limit", {}),
-    ("axis_dynamics", {"accel_scale": 0.6}),
-    ("axis_dynamics", {"jerk_scale": 0.5}),
-    ("lookahead_depth", {"blocks": 4}),
-    ("servo_lag", {"tau": 0.02}),
-    ("jerk_filter", {"window": 0.03}),
-    ("path_compression", {"max_angle": 10.0, "max_length": 5.0}),
-)
-
-
+FULL = (*PROGRAMS, "zlevel_cavity")
+MACHINES = ("linuxcnc-sim", "siemens-840d")
 #: An effect is visible when it at least doubles the held-out gap of the control case.
 VISIBLE = 2.0
 
 
-def observable(effect: str | None, params: dict[str, float], machine) -> bool:
-    """Whether the effect can show on this machine at all."""
-    if effect == "axis_dynamics" and "jerk_scale" in params:
-        return bool(np.isfinite(machine.max_jerk).any())
-    return True
+def draw(effect: str, m: Machine, rng: np.random.Generator) -> dict[str, float] | None:
+    """A random strength a machine plausibly shows, or None if ``m`` cannot show it."""
+    u = rng.uniform
+    if effect == "feed_override":
+        return {"scale": float(u(0.6, 0.9) if rng.random() < 0.5 else u(1.1, 1.4))}
+    if effect == "block_cycle_time":
+        return {"t_block": float(max(m.interpolation_time, 0.008) * u(1.5, 3.0))}
+    if effect == "corner_tolerance":
+        return {"tolerance": float(m.path_tolerance * 10 ** (u(0.3, 0.7) * rng.choice([-1, 1])))}
+    if effect == "normal_acceleration_factor":
+        return {"factor": float(u(0.4, 0.75))}
+    if effect == "arc_feed_limit":
+        return {}
+    if effect == "axis_dynamics":
+        if np.isfinite(m.max_jerk).any() and rng.random() < 0.5:
+            return {"jerk_scale": float(u(0.3, 0.6))}
+        return {"accel_scale": float(u(0.4, 0.75))}
+    if effect == "lookahead_depth":
+        return {"blocks": float(rng.integers(2, 9))}
+    if effect == "servo_lag":
+        return {"tau": float(u(0.01, 0.04))}
+    if effect == "jerk_filter":
+        return {"window": float(u(0.02, 0.06))}
+    if effect == "path_compression":
+        return {"max_angle": float(u(5.0, 15.0)), "max_length": float(u(2.0, 6.0))}
+    raise ValueError(effect)
+
+
+EFFECTS = (
+    "feed_override",
+    "block_cycle_time",
+    "corner_tolerance",
+    "normal_acceleration_factor",
+    "arc_feed_limit",
+    "axis_dynamics",
+    "lookahead_depth",
+    "servo_lag",
+    "jerk_filter",
+    "path_compression",
+)
 
 
 def trace_of(sim, source: str) -> Trace:
@@ -92,62 +110,65 @@ def trace_of(sim, source: str) -> Trace:
     )
 
 
-def run_case(nc, effects, machine, programs, effect, params):
+def run_case(nc, effects, machine, tps, effect, params):
     cases = []
-    for name in programs:
-        prog = EXAMPLES / f"{name}.ngc"
-        tp = nc.extract(str(prog))
+    for name, tp in tps.items():
         sim = simulate(tp, machine, effect, params, ncperf=nc)
-        al = align(tp, trace_of(sim, f"vm:{name}"))
-        cases.append((tp, [al], [name]))
+        cases.append((tp, [align(tp, trace_of(sim, f"vm:{name}"))], [name]))
     base = setup_for(machine, effects, ramps=True)
     return diagnose_cases(nc, cases, base, "profile", effects)
 
 
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument(
-        "--machine",
-        action="append",
-        help="preset or TOML (repeatable; default linuxcnc-sim and siemens-840d)",
-    )
-    ap.add_argument("--quick", action="store_true", help="four small programs only")
+    ap.add_argument("--seed", type=int, default=2026)
+    ap.add_argument("--draws", type=int, default=2, help="strengths per effect and machine")
+    ap.add_argument("--full", action="store_true", help="add the Z-level cavity (slower)")
     args = ap.parse_args()
+    rng = np.random.default_rng(args.seed)
     nc = Ncperf()
     effects = nc.effects()
-    programs = QUICK if args.quick else PROGRAMS
+    programs = FULL if args.full else PROGRAMS
+    tps = {p: nc.extract(str(EXAMPLES / f"{p}.ngc")) for p in programs}
     print(
-        f"Withheld effects, virtual machine traces (1 ms), {datetime.date.today()}; "
-        f"programs: {', '.join(programs)}"
+        f"Withheld effects, virtual machine traces (1 ms), {datetime.date.today()}; seed "
+        f"{args.seed}, {args.draws} strengths per effect; programs: {', '.join(programs)}"
     )
     print()
     print(
-        "| machine | withheld effect | true | ranked first | held-out gap before "
-        "[mm/min] | after | removed | fitted | wall [s] |"
+        "| machine | withheld effect | true | ranked first | held-out gap before [mm/min] "
+        "| after | removed | fitted | wall [s] |"
     )
     print("|---|---|---|---|---|---|---|---|---|")
+    confusion: Counter = Counter()
     firsts, removed, controls, hidden = [], [], [], []
-    for spec in args.machine or ["linuxcnc-sim", "siemens-840d"]:
+    t_all = time.perf_counter()
+    for spec in MACHINES:
         # The machine as the controller's parameters describe it: nothing folded in.
         machine = dataclasses.replace(resolve_machine(spec), effects=())
+        short = machine.name.split(" (")[0]
+        cases: list[tuple[str | None, dict[str, float]]] = [(None, {})]
+        for effect in EFFECTS:
+            for _ in range(args.draws if effect != "arc_feed_limit" else 1):
+                params = draw(effect, machine, rng)
+                if params is not None:
+                    cases.append((effect, params))
         control_gap = None
-        for effect, params in CASES:
-            if not observable(effect, params, machine):
-                continue
+        for effect, params in cases:
             t0 = time.perf_counter()
-            d = run_case(nc, effects, machine, programs, effect, params)
+            d = run_case(nc, effects, machine, tps, effect, params)
             wall = time.perf_counter() - t0
-            true = ", ".join(f"{k}={v:g}" for k, v in params.items()) or "-"
-            short = machine.name.split(" (")[0]
+            true = ", ".join(f"{k}={v:.4g}" for k, v in params.items()) or "-"
             named = d.best_effect or "none"
             if effect is None:
                 control_gap = d.effects[0].held_out_gap_before
                 controls.append(d.best_effect is None)
+                confusion["none", named] += 1
                 top = d.effects[0]
                 print(
-                    f"| {short} | none | - | {named} | {top.held_out_gap_before:.1f} "
-                    f"| {top.held_out_gap_after:.1f} ({top.name}) | {top.removed:.0%} | - "
-                    f"| {wall:.0f} |"
+                    f"| {short} | none | - | {named} | {top.held_out_gap_before:.1f} | "
+                    f"{top.held_out_gap_after:.1f} ({top.name}) | {top.removed:.0%} | - | "
+                    f"{wall:.0f} |"
                 )
                 continue
             row = next(r for r in d.effects if r.name == effect)
@@ -158,19 +179,36 @@ def main() -> int:
             else:
                 firsts.append(d.best_effect == effect)
                 removed.append(row.removed)
+                confusion[effect, d.best_effect or "none"] += 1
             print(
-                f"| {short} | {effect} | {true} | {named} | "
-                f"{row.held_out_gap_before:.1f} | {row.held_out_gap_after:.1f} | "
-                f"{row.removed:.0%} | {fitted} | {wall:.0f} |"
+                f"| {short} | {effect} | {true} | {named} | {row.held_out_gap_before:.1f} | "
+                f"{row.held_out_gap_after:.1f} | {row.removed:.0%} | {fitted} | {wall:.0f} |"
             )
             sys.stdout.flush()
+    print()
+    print("Confusion table (visible cases and the controls): rows the withheld effect, columns")
+    print("the effect the diagnosis named first.")
+    print()
+    rows = ["none", *EFFECTS]
+    cols = sorted(
+        {c for _, c in confusion},
+        key=lambda c: (c != "none", rows.index(c) if c in rows else 99, c),
+    )
+    print("| withheld \\ named | " + " | ".join(cols) + " |")
+    print("|---|" + "---|" * len(cols))
+    for r in rows:
+        if not any(confusion[r, c] for c in cols):
+            continue
+        print(f"| {r} | " + " | ".join(str(confusion[r, c] or "") for c in cols) + " |")
     print()
     print(
         f"withheld effect ranked first: {sum(firsts)}/{len(firsts)} "
         f"({sum(firsts) / max(len(firsts), 1):.0%}); median held-out gap removed by it: "
         f"{statistics.median(removed):.0%}; no effect named on unchanged traces: "
-        f"{sum(controls)}/{len(controls)}"
+        f"{sum(controls)}/{len(controls)}; {time.perf_counter() - t_all:.0f} s"
     )
+    if hidden:
+        print(f"not visible on these programs (left out): {'; '.join(hidden)}")
     return 0
 
 

@@ -13,11 +13,12 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    even-numbered traces when there are several (other runs or programs), else alternate
    stretches of one run -- and its gap measured on the held-out data it was not fitted on.
    Effects are ranked by how much of the held-out gap they remove; the best one counts only
-   if it removes at least BEST_SHARE of it ("no listed effect explains the gap" is an
-   answer: the model already explains the trace, or what is left is noise or an effect
-   not in the list). Effects are then added greedily while each still removes at least
-   ADD_SHARE of what is left, and what is left is at least STOP_SHARE of the gap before
-   (below that, a further effect would be fitted to the noise of the first one's fit).
+   if it removes at least BEST_SHARE of it, and MIN_FEED_SHARE of the programmed feed ("no
+   listed effect explains the gap" is an answer: the model already explains the trace, or
+   what is left is noise or an effect not in the list). Effects are then added greedily
+   while each still removes at least ADD_SHARE of what is left (and MIN_FEED_SHARE of F),
+   and what is left is at least STOP_SHARE of the gap before (below that, a further effect
+   would be fitted to the noise of the first one's fit).
 """
 
 from __future__ import annotations
@@ -53,6 +54,9 @@ MERGE_MM = 1.0
 BEST_SHARE = 0.20
 ADD_SHARE = 0.10
 STOP_SHARE = 0.10
+#: ... and remove at least this share of the programmed feed (RMS over the held-out data):
+#: a gap already within 1 % of F is explained, whatever share of it an effect could fit.
+MIN_FEED_SHARE = 0.01
 MAX_CHOSEN = 4
 #: Stretches of one run used for calibration / held-out data (alternating).
 CHUNKS = 16
@@ -259,6 +263,16 @@ def gap(preds: list[Prediction], data: list[Data], which: str) -> float:
     return math.sqrt(sq / n) * PER_MIN if n > 0 else 0.0
 
 
+def feed_level(data: list[Data]) -> float:
+    """RMS over time of the programmed feed on the held-out data (mm/min)."""
+    sq, n = 0.0, 0.0
+    for d in data:
+        sel = ~d.calibration
+        sq += float(np.sum(d.weight[sel] * d.feed[sel] ** 2))
+        n += float(d.weight[sel].sum())
+    return math.sqrt(sq / n) * PER_MIN if n > 0 else 0.0
+
+
 def _grid(p: Param, count: int) -> NDArray[np.float64]:
     if p.log and p.low > 0:
         g = np.geomspace(p.low, p.high, count)
@@ -454,7 +468,11 @@ def diagnose_cases(
             )
         )
     results.sort(key=lambda r: r.held_out_gap_after)
-    best = results[0].name if results and results[0].removed >= BEST_SHARE else None
+    floor = MIN_FEED_SHARE * feed_level(data)
+    best = None
+    if results and results[0].removed >= BEST_SHARE:
+        if results[0].held_out_gap_before - results[0].held_out_gap_after >= floor:
+            best = results[0].name
 
     chosen: list[str] = []
     chosen_params: dict[str, dict[str, float]] = {}
@@ -475,7 +493,7 @@ def diagnose_cases(
             if not trials:
                 break
             g_new, name, params, preds = min(trials, key=lambda x: x[0])
-            if g_now <= 0 or (g_now - g_new) / g_now < ADD_SHARE:
+            if g_now <= 0 or (g_now - g_new) / g_now < ADD_SHARE or g_now - g_new < floor:
                 break
             chosen.append(name)
             chosen_params[name] = params
@@ -569,7 +587,8 @@ def report(
     if d.best_effect is None:
         lines.append(
             f"  best effect      none: no effect removes {BEST_SHARE:.0%} of the held-out"
-            " gap (what is left is noise, or an effect not in this list)"
+            f" gap and {MIN_FEED_SHARE:.0%} of F (what is left is noise, or an effect not in"
+            " this list)"
         )
     else:
         lines.append(f"  best effect      {d.best_effect}")
