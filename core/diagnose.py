@@ -58,6 +58,8 @@ STOP_SHARE = 0.10
 #: a gap already within 1 % of F is explained, whatever share of it an effect could fit.
 MIN_FEED_SHARE = 0.01
 MAX_CHOSEN = 4
+#: Samples further apart than this many sample periods leave a hole: not compared.
+GAP_PERIODS = 20
 #: Stretches of one run used for calibration / held-out data (alternating).
 CHUNKS = 16
 #: Grid points per parameter when fitting (then a local refinement).
@@ -196,8 +198,17 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
     keep = tp.is_feed[move]
     grid, move = grid[keep], move[keep]
     # Average the samples at one arc length (stops), then interpolate along the path.
-    s_u, inv = np.unique(al.s, return_inverse=True)
+    s_u, first, inv = np.unique(al.s, return_index=True, return_inverse=True)
     v_u = np.bincount(inv, weights=al.v) / np.bincount(inv)
+    # Not across a hole in the recording: grid points whose neighbouring samples are more
+    # than GAP_PERIODS sample periods apart in time are left out (event-based recordings,
+    # whose values hold until the next event, have none).
+    if al.t.size > 2 and s_u.size > 1 and al.method != "line and feed":
+        period = float(np.median(np.diff(al.t)))
+        last = np.append(first[1:] - 1, al.t.size - 1)  # s is non-decreasing in time
+        k = np.clip(np.searchsorted(s_u, grid), 1, s_u.size - 1)
+        hole = al.t[first[k]] - al.t[last[k - 1]] > GAP_PERIODS * period
+        grid, move = grid[~hole], move[~hole]
     v = np.interp(grid, s_u, v_u)
     feed = tp.feed[move]
     weight = step / np.maximum(v, TIME_FLOOR * feed)

@@ -141,6 +141,26 @@ def test_unchanged_machine_has_no_best_effect(nc):
     assert d.best_effect is None and d.chosen == ()
 
 
+def test_a_gap_in_the_recording_is_left_out_not_filled_in(nc):
+    """Samples missing over 0.5 s (the recorder stalled) in a trace of the model itself: the
+    stretch they would have covered is not compared (no feed is invented across it), and
+    nothing is named."""
+    from core.diagnose import resample
+
+    tp = zigzag()
+    base = Setup(machine=machine(jerk=(INF, INF, INF)))
+    tr = synthetic_trace(nc, tp, base)
+    keep = (tr.t < 1.0) | (tr.t > 1.5)
+    holed = Trace(t=tr.t[keep], pos=tr.pos[keep], v=tr.v[keep], line=tr.line[keep], source="holed")
+    al = align(tp, holed)
+    s_lo, s_hi = al.s[al.t < 1.0].max(), al.s[al.t > 1.5].min()
+    assert s_hi - s_lo > 10.0  # the hole spans more than 10 mm of path
+    data = resample(tp, al, "t")
+    assert not np.any((data.s > s_lo + 0.1) & (data.s < s_hi - 0.1))
+    d = diagnose(nc, tp, [al], ["t"], base, "profile", nc.effects())
+    assert d.best_effect is None
+
+
 def test_paper_baseline_names_acceleration_ramps(nc):
     """Against the paper's point model, a real (ramped) motion is explained by ramps."""
     tp = zigzag()
