@@ -97,6 +97,23 @@ def test_alignment_keeps_a_plunge_apart_from_the_retract_it_retraces(nc, with_li
     assert np.all(al.s[plunge] > 10.0)
 
 
+def test_a_trace_in_other_units_is_refused(nc, tmp_path):
+    """The same motion recorded in inches, read as mm: low alignment quality, no diagnosis;
+    read with --trace-units inch, it aligns, at the arc lengths of the mm trace."""
+    from core.trace import TraceOptions
+
+    tp = zigzag()
+    tr = synthetic_trace(nc, tp, Setup(machine=machine()))
+    p = tmp_path / "inch.csv"
+    rows = np.column_stack([tr.t, tr.pos / 25.4, tr.v / 25.4, tr.line])
+    np.savetxt(p, rows, delimiter=",", header="t,x,y,z,v,line", comments="", fmt="%.7g")
+    al = align(tp, nc.read_trace(str(p)))
+    assert not al.ok and al.message.startswith("LOW ALIGNMENT QUALITY")
+    al = align(tp, nc.read_trace(str(p), TraceOptions(units="inch")))
+    assert al.ok
+    assert np.max(np.abs(al.s - align(tp, tr).s)) < 0.06
+
+
 def test_trace_of_another_program_is_refused(nc):
     """Positions far from the path: low alignment quality, not a diagnosis."""
     tp = zigzag()
