@@ -12,7 +12,8 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
 3. Every effect (:mod:`core.effects`) has its parameters fitted on calibration data -- the
    even-numbered traces when there are several (other runs or programs), else alternate
    stretches of one run -- and its gap measured on the held-out data it was not fitted on.
-   Effects are ranked by how much of the held-out gap they remove; the best one counts only
+   Effects are ranked by how much of the held-out gap they remove (among equally good ones,
+   within TIE_SHARE, the one with the fewest parameters first); the best one counts only
    if it removes at least BEST_SHARE of it, and MIN_FEED_SHARE of the programmed feed ("no
    listed effect explains the gap" is an answer: the model already explains the trace, or
    what is left is noise or an effect not in the list). Effects are then added greedily
@@ -58,6 +59,9 @@ STOP_SHARE = 0.10
 #: a gap already within 1 % of F is explained, whatever share of it an effect could fit.
 MIN_FEED_SHARE = 0.01
 MAX_CHOSEN = 4
+#: Effects whose held-out gaps differ by less than this share of what the best removes are
+#: equally good; the one with the fewest parameters is ranked first.
+TIE_SHARE = 0.05
 #: Samples further apart than this many sample periods leave a hole: not compared.
 GAP_PERIODS = 20
 #: Stretches of one run used for calibration / held-out data (alternating).
@@ -479,6 +483,16 @@ def diagnose_cases(
             )
         )
     results.sort(key=lambda r: r.held_out_gap_after)
+    # Effects that explain the data equally well (within TIE_SHARE of what the best removes):
+    # the simplest first -- a single feed rate explains an override and an axis feed limit
+    # alike, and the fewer parameters, the fewer ways to fit noise.
+    if results:
+        lead = results[0]
+        margin = TIE_SHARE * max(lead.held_out_gap_before - lead.held_out_gap_after, 0.0)
+        tied = [r for r in results if r.held_out_gap_after - lead.held_out_gap_after <= margin]
+        simplest = min(tied, key=lambda r: (len(effects[r.name].params), r.held_out_gap_after))
+        results.remove(simplest)
+        results.insert(0, simplest)
     floor = MIN_FEED_SHARE * feed_level(data)
     best = None
     if results and results[0].removed >= BEST_SHARE:
@@ -550,7 +564,9 @@ def toml_snippet(
         eff = effects.get(name) if effects is not None else None
         if machine is not None and eff is not None and eff.relative:
             before = eff.folded(machine)
-            values = {k: v * before.get(k, 1.0) for k, v in values.items()}
+            values = {
+                k: v * before.get(k, 1.0) if k in eff.relative else v for k, v in values.items()
+            }
         out.append(f"[effects.{name}]")
         out.extend(f"{k} = {v:.6g}" for k, v in values.items())
     return "\n".join(out)

@@ -8,7 +8,8 @@ their parameters to a measured trace.
 
 The prediction built from a Setup (:func:`core.predict.predict`):
 
-1. the tool path, with the programmed feeds scaled by ``feed_scale`` and, where
+1. the tool path, with the programmed feeds scaled by ``feed_scale`` (the indicators' feeds
+   by ``cap_scale``) and, where
    ``tolerance`` is set, every block's path tolerance replaced;
 2. the A2 evaluation on ``machine`` (whose limits, block time, TIT and normal-acceleration
    share effects may have changed), plus ``element_caps`` (extra block limits), minus the
@@ -75,6 +76,10 @@ class Setup:
     ramps : bool
         False: the paper's point model; True: the full feed profile.
     feed_scale : float
+        Scale on every programmed feed (the override).
+    cap_scale : float
+        Scale on every indicator's feed (corner, curvature, block-time and other caps): a
+        controller that applies its override after planning (LinuxCNC) scales these too.
     tolerance : float or None, mm
     lookahead : int or None, blocks
     element_caps : tuple of callables (ToolPath, Machine) -> (n,) mm/s
@@ -88,6 +93,7 @@ class Setup:
     machine: Machine
     ramps: bool = True
     feed_scale: float = 1.0
+    cap_scale: float = 1.0
     tolerance: float | None = None
     lookahead: int | None = None
     element_caps: tuple[Callable[[ToolPath, Machine], NDArray[np.float64]], ...] = ()
@@ -113,17 +119,17 @@ class Effect:
         How the effect changes the prediction.
     doc : str
         One line: what the controller does.
-    relative : bool
-        The parameters multiply what the setup already has (a scale): fitted on a machine
-        that already folds the effect in, they give the further factor. Otherwise they set
-        a value, and a fit starts from the machine's own.
+    relative : tuple of str
+        Parameters that multiply what the setup already has (scales): fitted on a machine
+        that already folds the effect in, they give the further factor. The others set a
+        value, and a fit starts from the machine's own.
     """
 
     name: str
     params: tuple[Param, ...]
     apply: Callable[[Setup, Mapping[str, float]], Setup] = field(repr=False)
     doc: str = ""
-    relative: bool = False
+    relative: tuple[str, ...] = ()
 
     def folded(self, machine: Machine) -> dict[str, float]:
         """The parameters the machine's ``[effects.NAME]`` table gives (defaults filled in),
@@ -136,9 +142,8 @@ class Effect:
     def start(self, machine: Machine) -> dict[str, float]:
         """Where a fit starts, the values that change nothing on top of ``machine``: the
         defaults, or the machine's folded values for an effect that sets them."""
-        if self.relative:
-            return self.defaults(machine)
-        return self.defaults(machine) | self.folded(machine)
+        folded = self.folded(machine)
+        return self.defaults(machine) | {k: v for k, v in folded.items() if k not in self.relative}
 
     def defaults(self, machine: Machine) -> dict[str, float]:
         return {p.name: p.default_for(machine) for p in self.params}

@@ -261,6 +261,10 @@ def predict(nc: Ncperf, tp: ToolPath, setup: Setup) -> Prediction:
                 )
             )
         indicators = kept
+    if setup.cap_scale != 1.0:
+        indicators = [
+            dataclasses.replace(ind, feed=ind.feed * setup.cap_scale) for ind in indicators
+        ]
     ev = combine(tp2, m, indicators)
     profile = (
         build_profile(

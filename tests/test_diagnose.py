@@ -221,7 +221,7 @@ def test_a_machine_with_folded_effects_starts_from_them(nc):
     assert d.chosen_params["feed_override"]["scale"] == pytest.approx(0.8, rel=0.01)
     assert "scale = 0.72" in toml_snippet(d, m, eff)
     assert eff["arc_acceleration"].start(m) == {"factor": 0.5}
-    assert eff["feed_override"].start(m) == {"scale": 1.0}
+    assert eff["feed_override"].start(m) == {"scale": 1.0, "caps": 0.0}
     d = diagnose(nc, tp, [align(tp, synthetic_trace(nc, tp, base))], ["t"], base, "profile", eff)
     assert d.best_effect is None
     arc = next(r for r in d.effects if r.name == "arc_acceleration")

@@ -28,7 +28,7 @@ EFFECT = Effect(
     ),
     apply=_apply,
     doc="per-axis acceleration, jerk and feed limits differ",
-    relative=True,
+    relative=("accel_scale", "jerk_scale", "feed_scale"),
 )
 
 
