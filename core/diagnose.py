@@ -56,8 +56,8 @@ BEST_SHARE = 0.20
 ADD_SHARE = 0.10
 STOP_SHARE = 0.10
 #: ... and remove at least this share of the programmed feed (RMS over the held-out data):
-#: a gap already within 1 % of F is explained, whatever share of it an effect could fit.
-MIN_FEED_SHARE = 0.01
+#: a gap already within 0.75 % of F is explained, whatever share of it an effect could fit.
+MIN_FEED_SHARE = 0.0075
 MAX_CHOSEN = 4
 #: Effects whose held-out gaps differ by less than this share of what the best removes are
 #: equally good; the one with the fewest parameters is ranked first.
