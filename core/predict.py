@@ -99,13 +99,12 @@ class Prediction:
             a = np.exp(-dt / su.servo_tau)
             pos = np.column_stack([_first_order(pos[:, j], a) for j in range(3)])
         v = np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
-        # Where the filtered positions are on the path: near the setpoint of tau earlier.
+        # Where the filtered positions are on the path: near the setpoint of tau earlier
+        # (within a millimetre of it).
         path = _path_points(tp)
         guess = np.interp(t - su.servo_tau, t, s)
-        for _ in range(2):
-            guess, _ = _refine(pos, guess, path)
-            guess = isotonic(guess)
-        return t, guess, v
+        s_obs, _ = _refine(pos, guess, path, half_width=1.0)
+        return t, isotonic(s_obs), v
 
     def signal(self, *, raw: bool = False) -> tuple[NDArray, NDArray, NDArray]:
         """(t, s, v) of the predicted motion sampled in time (s, mm, mm/s)."""

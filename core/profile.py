@@ -310,7 +310,7 @@ class Profile:
 
             a_p, b_p = np.zeros(sel.size), np.ones(sel.size)
             goal = target if rising else -target
-            for _ in range(30):
+            for _ in range(26):  # p to 1.5e-8 of the ramp
                 mid = 0.5 * (a_p + b_p)
                 below = place(mid) < goal
                 a_p = np.where(below, mid, a_p)
