@@ -1,0 +1,94 @@
+"""Time and peak memory of ``ncperf diagnose PROGRAM TRACE --svg OUT``, end to end.
+
+Not a test: from the repository root (package installed) run
+
+    PYTHONPATH=.:benchmarks python benchmarks/bench_diagnose.py [--runs 1] [--t-block 0.024]
+
+The trace is a whole program's recording at 1 ms: the bundled Z-level cavity of G1 chords
+(examples/zlevel_cavity_chords.ngc) run on the reference interpreter (benchmarks/vm) on the
+``siemens-840d`` preset with its block time raised to ``--t-block`` (the README's picture).
+The diagnosis aligns every sample, fits all registered effects and writes the SVG; each run
+is a fresh ``python -m core diagnose`` process, wall time measured around it and peak memory
+the child's maximum resident set size (os.wait4).
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import os
+import platform
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "benchmarks"))
+
+from vm.virtual_machine import simulate, write_csv  # noqa: E402
+
+PROGRAM = ROOT / "examples" / "zlevel_cavity_chords.ngc"
+PRESET = "siemens-840d"
+
+
+def run_cli(program: Path, trace: Path, svg: Path) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB) of one ``ncperf diagnose`` process."""
+    env = dict(os.environ, PYTHONPATH=str(ROOT))
+    t0 = time.perf_counter()
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "core", "diagnose", str(program), str(trace)]
+        + ["--machine", PRESET, "--svg", str(svg)],
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        env=env,
+    )
+    _, status, usage = os.wait4(proc.pid, 0)
+    wall = time.perf_counter() - t0
+    if status != 0:
+        raise SystemExit(f"ncperf diagnose {program} failed with status {status}")
+    return wall, usage.ru_maxrss / 1024.0
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--runs", type=int, default=1)
+    ap.add_argument("--t-block", type=float, default=0.024, help="the controller's block time, s")
+    args = ap.parse_args()
+
+    with tempfile.TemporaryDirectory() as tmp:
+        trace_path = Path(tmp) / "trace.csv"
+        t0 = time.perf_counter()
+        trace = simulate(str(PROGRAM), PRESET, "block_cycle_time", {"t_block": args.t_block})
+        write_csv(trace, trace_path)
+        t_vm = time.perf_counter() - t0
+        n = len(trace.t)
+        walls, rss = [], []
+        for _ in range(args.runs):
+            w, r = run_cli(PROGRAM, trace_path, Path(tmp) / "out.svg")
+            walls.append(w)
+            rss.append(r)
+
+    today = datetime.date.today().isoformat()
+    print(
+        f"ncperf diagnose PROGRAM TRACE --svg OUT, {today}, {platform.machine()}, "
+        f"Python {platform.python_version()}, {os.cpu_count()} cores; "
+        f"trace recorded in {t_vm:.1f} s by the reference interpreter\n"
+    )
+    print(
+        "| program | trace samples | trace length [s] | wall best [s] | wall median [s] "
+        "| peak RSS [MB] |"
+    )
+    print("|---|---|---|---|---|---|")
+    print(
+        f"| {PROGRAM.name} on {PRESET}, t_block {args.t_block * 1000:g} ms | {n:,} | "
+        f"{trace.t[-1] - trace.t[0]:.0f} | {min(walls):.1f} | {statistics.median(walls):.1f} | "
+        f"{max(rss):.0f} |"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
