@@ -336,11 +336,18 @@ def fit(
     # Defaults first: among equal scores the effect changes nothing.
     candidates.insert(0, dict(defaults))
     best = min(candidates, key=score)
+    if len(params) > 1:
+        # The coarse mesh can straddle a limit that only acts below a threshold (an axis
+        # speed under the programmed feed): scan each parameter on the fine 1-D grid, the
+        # others held at the best so far.
+        for p in params:
+            line = [best | {p.name: float(x)} for x in _grid(p, GRID_1D)]
+            best = min([best, *line], key=score)
     # Local refinement, one parameter at a time: a bracket around the best value that halves
     # (in log space for log parameters) every round.
     brackets = {}
     for p in params:
-        grid = _grid(p, GRID_1D if len(params) == 1 else GRID_2D if len(params) == 2 else GRID_ND)
+        grid = _grid(p, GRID_1D)
         k = int(np.argmin(np.abs(grid - best[p.name])))
         brackets[p.name] = (float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)]))
     for _ in range(REFINE):

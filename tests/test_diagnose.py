@@ -149,6 +149,34 @@ def test_a_known_effect_is_named_first(nc, name, params):
     assert d.gap_rms_after < 0.3 * d.gap_rms_before
 
 
+def test_an_axis_speed_limit_under_the_feed_is_not_a_feed_override(nc):
+    """Axes limited to 75 mm/s under F = 100 mm/s: the X and Y moves run at 75, the 45-degree
+    moves at min(100, 75 sqrt(2)) = 100. A feed override would slow both; the diagnosis names
+    axis_dynamics, with feed_scale = 75 / 500 = 0.15 (the machine file's axes: 30 m/min)."""
+    tp = path(
+        [
+            {"end": (50, 0, 0)},
+            {"end": (80, 30, 0)},
+            {"end": (80, 80, 0)},
+            {"end": (50, 110, 0)},
+            {"end": (0, 110, 0)},
+            {"end": (-30, 80, 0)},
+            {"end": (-30, 30, 0)},
+            {"end": (0, 0, 0)},
+        ]
+        * 3
+    )
+    m = machine(jerk=(INF, INF, INF))
+    effects = nc.effects()
+    base = Setup(machine=m)
+    slow_axes = machine(feed=(4.5, 4.5, 4.5), jerk=(INF, INF, INF))  # 75 mm/s
+    tr = synthetic_trace(nc, tp, Setup(machine=slow_axes))
+    d = diagnose(nc, tp, [align(tp, tr)], ["t"], base, "profile", effects)
+    assert d.best_effect == "axis_dynamics"
+    assert d.effects[0].params["feed_scale"] == pytest.approx(0.15, rel=0.03)
+    assert d.effects[0].held_out_gap_after < 0.1 * d.effects[0].held_out_gap_before
+
+
 def test_unchanged_machine_has_no_best_effect(nc):
     """A trace of the model itself: nothing to explain, best_effect is None."""
     tp = zigzag()

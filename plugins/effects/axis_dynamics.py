@@ -1,8 +1,10 @@
 """axis_dynamics: the axes' limits differ from the machine file.
 
-Parameters: ``accel_scale``, ``jerk_scale`` and ``feed_scale`` (0.25-4), multiplying every
-axis's acceleration, jerk and maximum feed -- in the corner and curvature limits, the blocks'
-feed limits, the rapids and the ramps alike.
+Parameters: ``accel_scale``, ``jerk_scale`` (0.25-4) and ``feed_scale`` (0.05-4), multiplying
+every axis's acceleration, jerk and maximum feed -- in the corner and curvature limits, the
+blocks' feed limits, the rapids and the ramps alike. The feed scale reaches further down: an
+axis speed limit only shows once it falls under the programmed feeds, and machine files give
+axis speeds (rapids) several times the cutting feeds.
 """
 
 from __future__ import annotations
@@ -24,7 +26,7 @@ EFFECT = Effect(
     params=(
         Param("accel_scale", 0.25, 4.0, 1.0, log=True),
         Param("jerk_scale", 0.25, 4.0, 1.0, log=True),
-        Param("feed_scale", 0.25, 4.0, 1.0, log=True),
+        Param("feed_scale", 0.05, 4.0, 1.0, log=True),
     ),
     apply=_apply,
     doc="per-axis acceleration, jerk and feed limits differ",
