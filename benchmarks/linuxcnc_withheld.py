@@ -55,9 +55,16 @@ ACCEL = [
     for sec in ("AXIS_X", "AXIS_Y", "AXIS_Z", "JOINT_0", "JOINT_1", "JOINT_2")
 ]
 ACCEL += ["TRAJ.MAX_LINEAR_ACCELERATION=1200", "TRAJ.DEFAULT_LINEAR_ACCELERATION=1200"]
+#: Axis speeds only: [TRAJ]MAX_LINEAR_VELOCITY stays 250 mm/s, so a diagonal runs faster than
+#: an axis (LinuxCNC's task splits a line's speed by its axis shares).
+AXIS_SPEED = [
+    f"{sec}.MAX_VELOCITY=50"
+    for sec in ("AXIS_X", "AXIS_Y", "AXIS_Z", "JOINT_0", "JOINT_1", "JOINT_2")
+]
 
 #: (label, effect expected, its true parameters, --set overrides, feed override, G64 P run);
-#: the last two are made from the unchanged machine's traces (see :func:`post_process`).
+#: servo_lag and jerk_filter are made from the unchanged machine's traces (see
+#: :func:`post_process`). New variants go last: the cached traces are numbered by position.
 VARIANTS = (
     ("unchanged", None, {}, [], 1.0, None),
     ("feed override 80 %", "feed_override", {"scale": 0.8}, [], 0.8, None),
@@ -95,6 +102,15 @@ VARIANTS = (
     ),  # Effects the controller does not have, put on the unchanged machine's traces.
     ("actual positions behind a 20 ms servo lag", "servo_lag", {"tau": 0.02}, [], 1.0, None),
     ("setpoint smoothed over 30 ms", "jerk_filter", {"window": 0.03}, [], 1.0, None),
+    # A setting again.
+    (
+        "axis speed 50 mm/s (preset 250)",
+        "axis_dynamics",
+        {"feed_scale": 0.2},
+        AXIS_SPEED,
+        1.0,
+        None,
+    ),
 )
 
 
