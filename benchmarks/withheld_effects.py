@@ -14,7 +14,9 @@ the share removed), the fitted parameters against the true ones; then the confus
 (true effect x named effect) and the summary. A control case per machine, with no effect,
 checks that nothing is named when nothing is there.
 
-An effect a machine cannot show is not drawn there (a jerk scale without a jerk limit). An
+axis_dynamics is drawn as an acceleration or jerk scale and, from a stream of its own (so
+the other cases stay those of the seed), as axis speeds at 40-80 % of the highest programmed
+feed. An effect a machine cannot show is not drawn there (a jerk scale without a jerk limit). An
 effect that leaves the traces as they were on these programs (held-out gap before modelling
 under VISIBLE times the control's) is reported as not visible and left out of the score:
 nothing can be diagnosed from traces it did not change.
@@ -126,6 +128,7 @@ def main() -> int:
     ap.add_argument("--full", action="store_true", help="add the Z-level cavity (slower)")
     args = ap.parse_args()
     rng = np.random.default_rng(args.seed)
+    speed_rng = np.random.default_rng(args.seed + 1)
     nc = Ncperf()
     effects = nc.effects()
     programs = FULL if args.full else PROGRAMS
@@ -153,6 +156,12 @@ def main() -> int:
                 params = draw(effect, machine, rng)
                 if params is not None:
                     cases.append((effect, params))
+        # Axis speeds under the programmed feed (drawn from a stream of their own, so the
+        # cases above stay those of the seed): 40-80 % of the highest feed.
+        f_max = max(float(tp.feed[tp.is_feed].max()) for tp in tps.values())
+        for _ in range(args.draws):
+            share = float(speed_rng.uniform(0.4, 0.8))
+            cases.append(("axis_dynamics", {"feed_scale": share * f_max / machine.max_feed.min()}))
         control_gap = None
         for effect, params in cases:
             t0 = time.perf_counter()

@@ -271,6 +271,18 @@ def test_axis_dynamics_scales_the_ramps(nc):
     assert tr.cycle_time == pytest.approx(1.025, abs=DT)
 
 
+def test_axis_dynamics_feed_scale_caps_axis_speed_not_path_speed(nc):
+    """feed_scale 0.2 on 250 mm/s axes: 50 mm/s per axis, under F = 100 mm/s. Along X the tool
+    runs at 50 mm/s; on a line at 30 deg to X at min(50 / cos 30, 50 / sin 30) = 57.74 mm/s."""
+    c, s = math.cos(math.pi / 6), math.sin(math.pi / 6)
+    along = path([{"end": (100, 0, 0)}], feed=100.0)
+    slant = path([{"end": (100 * c, 100 * s, 0)}], feed=100.0)
+    tr_a = simulate(along, lcnc(), "axis_dynamics", {"feed_scale": 0.2}, ncperf=nc)
+    tr_s = simulate(slant, lcnc(), "axis_dynamics", {"feed_scale": 0.2}, ncperf=nc)
+    assert np.max(tr_a.v) == pytest.approx(50.0, rel=1e-6)
+    assert np.median(plateau(tr_s, 20, 80)) == pytest.approx(50.0 / c, rel=1e-6)
+
+
 def test_servo_lag_positions_lag_by_v_tau(nc):
     """tau 20 ms at 100 mm/s on a straight line: the actual position is v tau = 2 mm behind the
     setpoint; its speed is still 100 mm/s; the trace is actual and longer."""

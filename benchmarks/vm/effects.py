@@ -23,7 +23,11 @@ EFFECTS: dict[str, dict[str, tuple[float, float, float | None]]] = {
     "corner_tolerance": {"tolerance": (0.0005, 1.0, None)},
     "normal_acceleration_factor": {"factor": (0.2, 1.0, 1.0)},
     "arc_feed_limit": {},
-    "axis_dynamics": {"accel_scale": (0.25, 4.0, 1.0), "jerk_scale": (0.25, 4.0, 1.0)},
+    "axis_dynamics": {
+        "accel_scale": (0.25, 4.0, 1.0),
+        "jerk_scale": (0.25, 4.0, 1.0),
+        "feed_scale": (0.05, 4.0, 1.0),
+    },
     "feed_override": {"scale": (0.5, 1.5, 1.0)},
     "servo_lag": {"tau": (0.0, 0.2, 0.0)},
     "jerk_filter": {"window": (0.0, 0.1, 0.0)},
@@ -72,9 +76,11 @@ EFFECT_DOCS: dict[str, str] = {
         "principal normal and in the tangent over the arc's sweep."
     ),
     "axis_dynamics": (
-        "accel_scale, jerk_scale [0.25, 4]: every axis's max acceleration and max jerk are "
-        "multiplied by these, both in the corner and curvature limits (models 1, 2) and in "
-        "the motion (tangential acceleration and jerk); an infinite jerk stays infinite."
+        "accel_scale, jerk_scale [0.25, 4], feed_scale [0.05, 4]: every axis's max "
+        "acceleration, max jerk and max feed are multiplied by these, both in the corner, "
+        "curvature and block feed limits (models 1, 2, the axes' share of each block's "
+        "direction) and in the motion (tangential acceleration and jerk, rapids); an infinite "
+        "jerk stays infinite."
     ),
     "feed_override": (
         "scale [0.5, 1.5]: every programmed feed F is multiplied by scale before anything "

@@ -410,6 +410,7 @@ def controller_setup(
             machine,
             max_acceleration=machine.max_acceleration * params["accel_scale"],
             max_jerk=machine.max_jerk * params["jerk_scale"],
+            max_feed=machine.max_feed * params["feed_scale"],
         )
     elif effect == "lookahead_depth":
         window = int(params["blocks"])
