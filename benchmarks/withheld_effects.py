@@ -1,7 +1,7 @@
 """Does ``ncperf diagnose`` find an effect it is not told about? A confusion table.
 
 Not a test: ``PYTHONPATH=.:benchmarks python benchmarks/withheld_effects.py [--seed N]
-[--draws K] [--full]`` (about 13 minutes on 2 cores with the defaults).
+[--draws K] [--full]`` (about 15 minutes on 2 cores with the defaults).
 
 Every case runs a set of bundled example programs on the reference virtual machine
 (``benchmarks/vm``, an interpolator independent of ``core.profile``) with **one** controller
