@@ -34,12 +34,12 @@ from gen_finishing import generate  # noqa: E402
 STELLABEE = ROOT.parent / "shared" / "data" / "gcode" / "linuxcnc-tp-tests" / "stellabee1.ngc"
 
 
-def run_cli(program: Path, svg: Path) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB) of one ``ncperf analyze`` process."""
+def run_ncperf(*args: str) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB) of one ``ncperf ARGS`` process."""
     env = dict(os.environ, PYTHONPATH=str(ROOT))
     t0 = time.perf_counter()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "core", "analyze", str(program), "--svg", str(svg)],
+        [sys.executable, "-m", "core", *args],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
         env=env,
@@ -47,8 +47,13 @@ def run_cli(program: Path, svg: Path) -> tuple[float, float]:
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t0
     if status != 0:
-        raise SystemExit(f"ncperf analyze {program} failed with status {status}")
+        raise SystemExit(f"ncperf {' '.join(args)} failed with status {status}")
     return wall, usage.ru_maxrss / 1024.0
+
+
+def run_cli(program: Path, svg: Path) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB) of one ``ncperf analyze`` process."""
+    return run_ncperf("analyze", str(program), "--svg", str(svg))
 
 
 def stages(program: Path, svg: Path) -> dict[str, float]:

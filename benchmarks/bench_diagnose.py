@@ -19,7 +19,6 @@ import datetime
 import os
 import platform
 import statistics
-import subprocess
 import sys
 import tempfile
 import time
@@ -28,28 +27,11 @@ from pathlib import Path
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT / "benchmarks"))
 
+from bench_analyze import run_ncperf  # noqa: E402
 from vm.virtual_machine import simulate, write_csv  # noqa: E402
 
 PROGRAM = ROOT / "examples" / "zlevel_cavity_chords.ngc"
 PRESET = "siemens-840d"
-
-
-def run_cli(program: Path, trace: Path, svg: Path) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB) of one ``ncperf diagnose`` process."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
-    t0 = time.perf_counter()
-    proc = subprocess.Popen(
-        [sys.executable, "-m", "core", "diagnose", str(program), str(trace)]
-        + ["--machine", PRESET, "--svg", str(svg)],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
-        env=env,
-    )
-    _, status, usage = os.wait4(proc.pid, 0)
-    wall = time.perf_counter() - t0
-    if status != 0:
-        raise SystemExit(f"ncperf diagnose {program} failed with status {status}")
-    return wall, usage.ru_maxrss / 1024.0
 
 
 def main() -> int:
@@ -67,7 +49,15 @@ def main() -> int:
         n = len(trace.t)
         walls, rss = [], []
         for _ in range(args.runs):
-            w, r = run_cli(PROGRAM, trace_path, Path(tmp) / "out.svg")
+            w, r = run_ncperf(
+                "diagnose",
+                str(PROGRAM),
+                str(trace_path),
+                "--machine",
+                PRESET,
+                "--svg",
+                str(Path(tmp) / "out.svg"),
+            )
             walls.append(w)
             rss.append(r)
 
