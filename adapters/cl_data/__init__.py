@@ -20,7 +20,8 @@ import re
 from pathlib import Path
 
 from adapters.cl_data.interp import interpret
-from adapters.cl_data.source import Source, check_bytes, scan_gotos
+from adapters.cl_data.source import scan_gotos
+from adapters.source import Source, check_bytes
 from core import InputError, ToolPath, hookimpl
 
 #: Extensions CAM systems give CL data (NX .cls/.clsf, Creo .ncl, SolidWorks CAM .apt...).
@@ -74,7 +75,7 @@ def read_cl(data: bytes, name: str) -> ToolPath:
         ``tool_axis`` when GOTO records carry i,j,k.
     """
     src = Source(name, data)
-    check_bytes(src)
+    check_bytes(src, "CL data", "CL data")
     return interpret(src, scan_gotos(src))
 
 

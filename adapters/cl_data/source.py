@@ -16,12 +16,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from core.errors import InputError
-
-#: A CL line longer than this is not CL data (CAM systems write at most a few
-#: hundred characters and continue longer records with "$"); without the limit
-#: a 50 MB line would be echoed and parsed.
-MAX_LINE = 4096
+from adapters.source import Source
 
 LF, CR, TAB, SPACE = 10, 13, 9, 32
 SLASH, COMMA = ord("/"), ord(",")
@@ -37,62 +32,6 @@ _SPAN_OK = _NUMBER | _BLANK
 _SPAN_OK[COMMA] = _SPAN_OK[LF] = True
 _SEPARATOR = np.zeros(256, dtype=bool)
 _SEPARATOR[COMMA] = _SEPARATOR[LF] = True
-
-
-class Source:
-    """The raw bytes and line offsets of a CL file, for the readers and for messages."""
-
-    def __init__(self, name: str, data: bytes) -> None:
-        self.name = name
-        if b"\n" not in data and b"\r" in data:
-            data = data.replace(b"\r", b"\n")  # old Mac line ends: CR only
-        self.data = data
-        buf = np.frombuffer(data, dtype=np.uint8)
-        self.buf = buf
-        self.nl = np.flatnonzero(buf == LF)
-        # Line i spans [starts[i], ends[i]) without its newline.
-        self.starts = np.concatenate([[0], self.nl + 1]).astype(np.int64)
-        self.ends = np.concatenate([self.nl, [buf.size]]).astype(np.int64)
-        if self.starts[-1] == buf.size and buf.size > 0:
-            # A final newline does not start another line.
-            self.starts, self.ends = self.starts[:-1], self.ends[:-1]
-        self.n_lines = int(self.starts.size)
-
-    def text(self, i: int) -> str:
-        """Line i (0-based) as text, without its line end."""
-        return self.data[self.starts[i] : self.ends[i]].decode("utf-8", "replace").rstrip("\r")
-
-    def line_of(self, pos: int) -> int:
-        """0-based line of byte offset ``pos``."""
-        return int(np.searchsorted(self.nl, pos, side="left"))
-
-    def error(self, i: int, message: str, *, quote: bool = True) -> InputError:
-        """An InputError at 0-based line ``i``, quoting the line."""
-        return InputError(
-            message, source=self.name, line=i + 1, text=self.text(i) if quote else None
-        )
-
-
-def check_bytes(src: Source) -> None:
-    """Empty, binary and absurdly long input: one-line errors naming the line."""
-    buf = src.buf
-    if buf.size == 0 or not np.any(buf > SPACE):
-        raise InputError("empty file: no CL data in it", source=src.name)
-    if b"\x00" in src.data:
-        raise src.error(
-            src.line_of(src.data.index(b"\x00")),
-            "binary file (NUL byte); not CL data",
-            quote=False,
-        )
-    lengths = src.ends - src.starts
-    long_ = np.flatnonzero(lengths > MAX_LINE)
-    if long_.size:
-        i = int(long_[0])
-        raise src.error(
-            i,
-            f"line is {int(lengths[i])} characters long (limit {MAX_LINE}); not CL data",
-            quote=False,
-        )
 
 
 @dataclass

@@ -18,11 +18,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adapters.gcode import words as W
-from core.errors import InputError
-
-#: A G-code line longer than this is not G-code (LinuxCNC stops at 256 characters,
-#: Fanuc at a few hundred); without the limit a 50 MB line would be echoed and parsed.
-MAX_LINE = 4096
+from adapters.source import Source, check_bytes
 
 SPACE, TAB, CR, LF, VT, FF = 32, 9, 13, 10, 11, 12
 
@@ -77,62 +73,6 @@ class Words:
     special_lines: int = 0
 
 
-class Source:
-    """The raw bytes and line offsets of a file, for error messages."""
-
-    def __init__(self, name: str, data: bytes) -> None:
-        self.name = name
-        if b"\n" not in data and b"\r" in data:
-            data = data.replace(b"\r", b"\n")  # old Mac line ends: CR only
-        self.data = data
-        buf = np.frombuffer(data, dtype=np.uint8)
-        self.buf = buf
-        self.nl = np.flatnonzero(buf == LF)
-        # Line i spans [starts[i], ends[i]) without its newline.
-        self.starts = np.concatenate([[0], self.nl + 1]).astype(np.int64)
-        self.ends = np.concatenate([self.nl, [buf.size]]).astype(np.int64)
-        if self.starts[-1] == buf.size and buf.size > 0:
-            # A final newline does not start another line.
-            self.starts, self.ends = self.starts[:-1], self.ends[:-1]
-        self.n_lines = int(self.starts.size)
-
-    def text(self, i: int) -> str:
-        """Line i (0-based) as text."""
-        return self.data[self.starts[i] : self.ends[i]].decode("utf-8", "replace").rstrip("\r")
-
-    def line_of(self, pos: int) -> int:
-        """0-based line of byte offset ``pos``."""
-        return int(np.searchsorted(self.nl, pos, side="left"))
-
-    def error(self, i: int, message: str, *, quote: bool = True) -> InputError:
-        return InputError(
-            message, source=self.name, line=i + 1, text=self.text(i) if quote else None
-        )
-
-
-# ----------------------------------------------------------------------- checks
-def check_bytes(src: Source) -> None:
-    """Empty, binary and absurdly long input: one-line errors naming the line."""
-    buf = src.buf
-    if buf.size == 0 or not np.any(buf > SPACE):
-        raise InputError("empty file: no G-code in it", source=src.name)
-    if b"\x00" in src.data:
-        raise src.error(
-            src.line_of(src.data.index(b"\x00")),
-            "binary file (NUL byte); not a G-code program",
-            quote=False,
-        )
-    lengths = src.ends - src.starts
-    long_ = np.flatnonzero(lengths > MAX_LINE)
-    if long_.size:
-        i = int(long_[0])
-        raise src.error(
-            i,
-            f"line is {int(lengths[i])} characters long (limit {MAX_LINE}); not a G-code program",
-            quote=False,
-        )
-
-
 # ----------------------------------------------------------------------- vectorised path
 def _special_lines_from_bytes(src: Source) -> NDArray[np.bool_]:
     """Lines the vectorised path cannot take: unusual bytes or unbalanced/nested parentheses."""
@@ -184,7 +124,7 @@ def _line_ranges(
 
 def tokenize(src: Source) -> Words:
     """All words of the program (see module docstring)."""
-    check_bytes(src)
+    check_bytes(src, "G-code", "a G-code program")
     special = _special_lines_from_bytes(src)
     comments = _comment_mask(src, special)
 
