@@ -21,33 +21,12 @@ from pathlib import Path
 
 from adapters.cl_data.interp import interpret
 from adapters.cl_data.source import scan_gotos
+from adapters.gcode import EXTENSIONS as GCODE_EXTENSIONS  # never claimed, whatever they hold
 from adapters.source import Source, check_bytes
 from core import InputError, ToolPath, hookimpl
 
 #: Extensions CAM systems give CL data (NX .cls/.clsf, Creo .ncl, SolidWorks CAM .apt...).
 EXTENSIONS = frozenset({".cls", ".clsf", ".apt", ".cl", ".aptsource", ".cldata", ".ncl"})
-
-#: G-code extensions: never claimed, whatever the file holds (the G-code adapter's list).
-GCODE_EXTENSIONS = frozenset(
-    {
-        ".nc",
-        ".ngc",
-        ".gcode",
-        ".gc",
-        ".g",
-        ".tap",
-        ".cnc",
-        ".mpf",
-        ".spf",
-        ".ptp",
-        ".eia",
-        ".iso",
-        ".min",
-        ".din",
-        ".fnc",
-        ".nci",
-    }
-)
 
 #: The first non-blank line of CL data in a file with another extension.
 _LOOKS_LIKE_CL = re.compile(
