@@ -50,7 +50,7 @@ from numpy.typing import NDArray
 
 from core import Machine, Ncperf, ToolPath, resolve_machine
 from core import geometry as g
-from core.toolpath import MoveKind
+from core.profile import points_along
 
 from .effects import EFFECT_DOCS, EFFECTS, resolve_effect
 from .limits import ControllerSetup, Segments, controller_setup
@@ -143,24 +143,9 @@ def positions(
         b = sg.blend[i]
         part = b < 0
         if part.any():
+            # On the program's own moves: the program's geometry (ncperf's, not its planner).
             k = sg.move[i[part]]
-            length = tp.length[k]
-            u = np.clip(sg.offset[i[part]] + dd[part], 0.0, length)
-            frac = np.divide(u, length, out=np.zeros_like(u), where=length > 0)
-            q = tp.start[k] + frac[:, None] * (tp.end[k] - tp.start[k])
-            arc = tp.is_arc[k]
-            if arc.any():
-                ka = k[arc]
-                q[arc] = g.arc_points(
-                    tp.start[ka],
-                    tp.center[ka],
-                    tp.normal[ka],
-                    tp.kind[ka] == MoveKind.ARC_CCW,
-                    tp.sweep[ka],
-                    tp.pitch[ka],
-                    frac[arc],
-                )
-            p[part] = q
+            p[part] = points_along(tp, k, np.clip(sg.offset[i[part]] + dd[part], 0.0, tp.length[k]))
         if (~part).any():
             bb = b[~part]
             phi = (sg.phi0[i[~part]] + dd[~part] / sg.radius[bb])[:, None]
