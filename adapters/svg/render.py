@@ -850,6 +850,52 @@ def _check(tp: ToolPath, ann: Annotations) -> None:
         raise ValueError(f"annotations.junction must lie in 0..{n - 2}, got {j.min()}..{j.max()}")
 
 
+#: Attributes of a plot group: coordinates are integers of 1/Q px, stroke widths too.
+PLOT_ATTRS = (
+    f'transform="scale({1 / Q:g})" fill="none" stroke-width="{round(STROKE_PX * Q)}"'
+    f' stroke-linecap="round" stroke-linejoin="round"'
+)
+
+
+def _document_head(width: float, height: float, title: str, head: str) -> bytes:
+    """The SVG's opening: size, title, white background and the heading line."""
+    return (
+        f'<?xml version="1.0" encoding="UTF-8"?>\n'
+        f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{width:.0f}" '
+        f'height="{height:.0f}" viewBox="0 0 {width:.0f} {height:.0f}" '
+        f'font-family="sans-serif" font-size="12">\n'
+        f"<title>{title}</title>\n"
+        f'<rect width="{width:.0f}" height="{height:.0f}" fill="#ffffff"/>\n'
+        f'<text x="{MARGIN:.0f}" y="28" font-size="16" font-weight="bold">{head}</text>\n'
+    ).encode()
+
+
+def _rapid_style(ann: Annotations, label: str = "rapid") -> tuple[str, str]:
+    """Stroke attributes and legend label of rapids: dashed, in the annotations' colour."""
+    rapid = _colour((ann.rapid_colour,), 0)
+    return (
+        f'stroke="{rapid}" stroke-width="{round(RAPID_STROKE_PX * Q)}" '
+        f'stroke-dasharray="{4 * Q} {3 * Q}"',
+        label,
+    )
+
+
+def _reduction_severity(
+    tp: ToolPath, ann: Annotations
+) -> tuple[NDArray[np.int64], dict[int, tuple[str, str]]]:
+    """Severity of each move by its reduction class (-1 for rapids), and the styles."""
+    nclass = len(ann.class_labels)
+    mc = np.asarray(ann.move_class, dtype=np.int64)
+    sev = np.where(tp.is_feed, np.clip(mc, 0, nclass - 1), -1)
+    styles = {-1: _rapid_style(ann)}
+    for c in range(nclass):
+        styles[c] = (
+            f'stroke="{_colour(ann.class_colours, c)}"',
+            f"reduction {ann.class_labels[c]}",
+        )
+    return sev, styles
+
+
 def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
     """The whole SVG document (UTF-8) for a tool path and its annotations.
 
@@ -869,23 +915,10 @@ def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
     _check(tp, ann)
     st = strokes(tp, view)
     fr = st.frame
-    rapid = _colour((ann.rapid_colour,), 0)
-    rapid_style = (
-        f'stroke="{rapid}" stroke-width="{round(RAPID_STROKE_PX * Q)}" '
-        f'stroke-dasharray="{4 * Q} {3 * Q}"',
-        "rapid",
-    )
-
     # Left (Figure 11): the severity is the reduction class.
-    mc = np.asarray(ann.move_class, dtype=np.int64)
     nclass = len(ann.class_labels)
-    sev_left = np.where(tp.is_feed, np.clip(mc, 0, nclass - 1), -1)
-    left_styles = {-1: rapid_style}
-    for c in range(nclass):
-        left_styles[c] = (
-            f'stroke="{_colour(ann.class_colours, c)}"',
-            f"reduction {ann.class_labels[c]}",
-        )
+    sev_left, left_styles = _reduction_severity(tp, ann)
+    rapid_style = left_styles[-1]
     left, rn_left = panel(st, tp, sev_left, left_styles)
     marks, mark_cell, mark_count = markers(st, tp, ann)
 
@@ -919,22 +952,7 @@ def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
     head = escape(f"{ann.title} on {ann.machine}: {VIEW_NAMES[view]} view")
     s: list[bytes] = []
     w = s.append
-    w(
-        (
-            f'<?xml version="1.0" encoding="UTF-8"?>\n'
-            f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{width:.0f}" '
-            f'height="{height:.0f}" viewBox="0 0 {width:.0f} {height:.0f}" '
-            f'font-family="sans-serif" font-size="12">\n'
-            f"<title>ncperf: {head}</title>\n"
-            f'<rect width="{width:.0f}" height="{height:.0f}" fill="#ffffff"/>\n'
-            f'<text x="{MARGIN:.0f}" y="28" font-size="16" font-weight="bold">{head}</text>\n'
-        ).encode()
-    )
-    # Plot coordinates are integers of 1/Q px: widths inside are in those units too.
-    plot_attrs = (
-        f'transform="scale({1 / Q:g})" fill="none" stroke-width="{round(STROKE_PX * Q)}"'
-        f' stroke-linecap="round" stroke-linejoin="round"'
-    )
+    w(_document_head(width, height, f"ncperf: {head}", head))
     for x, title, groups, is_left in (
         (x_left, LEFT_TITLE, left, True),
         (x_right, RIGHT_TITLE, right, False),
@@ -944,7 +962,7 @@ def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
                 f'<g transform="translate({x:.0f},{TOP:.0f})">\n'
                 f'<text x="0" y="-10" font-size="14" font-weight="bold">{escape(title)}</text>\n'
                 f'<rect width="{PLOT_W:.0f}" height="{ph:.1f}" fill="none" stroke="#cccccc"/>\n'
-                f"<g {plot_attrs}>\n"
+                f"<g {PLOT_ATTRS}>\n"
             ).encode()
         )
         s.extend(groups)
@@ -986,41 +1004,15 @@ def render_comparison(
     first_ann = panels[0][2]
     nclass = len(first_ann.class_labels)
     rapid = _colour((first_ann.rapid_colour,), 0)
-    rapid_style = (
-        f'stroke="{rapid}" stroke-width="{round(RAPID_STROKE_PX * Q)}" '
-        f'stroke-dasharray="{4 * Q} {3 * Q}"',
-        "rapid",
-    )
     plot_h = max(st.frame.height for *_, st in drawn)
     width = 2 * MARGIN + len(drawn) * PLOT_W + (len(drawn) - 1) * GAP
     legend_y = TOP + plot_h + 48.0
     height = legend_y + ROW * (nclass + 3) + MARGIN
     head = escape(f"ncperf compare on {first_ann.machine}: {VIEW_NAMES[view]} view, one scale")
-    plot_attrs = (
-        f'transform="scale({1 / Q:g})" fill="none" stroke-width="{round(STROKE_PX * Q)}"'
-        f' stroke-linecap="round" stroke-linejoin="round"'
-    )
-    s: list[bytes] = [
-        (
-            f'<?xml version="1.0" encoding="UTF-8"?>\n'
-            f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{width:.0f}" '
-            f'height="{height:.0f}" viewBox="0 0 {width:.0f} {height:.0f}" '
-            f'font-family="sans-serif" font-size="12">\n'
-            f"<title>{head}</title>\n"
-            f'<rect width="{width:.0f}" height="{height:.0f}" fill="#ffffff"/>\n'
-            f'<text x="{MARGIN:.0f}" y="28" font-size="16" font-weight="bold">{head}</text>\n'
-        ).encode()
-    ]
+    s: list[bytes] = [_document_head(width, height, head, head)]
     for k, (label, tp, ann, st) in enumerate(drawn):
         x = MARGIN + k * (PLOT_W + GAP)
-        mc = np.asarray(ann.move_class, dtype=np.int64)
-        sev = np.where(tp.is_feed, np.clip(mc, 0, nclass - 1), -1)
-        styles = {-1: rapid_style}
-        for c in range(nclass):
-            styles[c] = (
-                f'stroke="{_colour(ann.class_colours, c)}"',
-                f"reduction {ann.class_labels[c]}",
-            )
+        sev, styles = _reduction_severity(tp, ann)
         groups, _ = panel(st, tp, sev, styles)
         marks, _, _ = markers(st, tp, ann)
         s.append(
@@ -1028,7 +1020,7 @@ def render_comparison(
                 f'<g transform="translate({x:.0f},{TOP:.0f})">\n'
                 f'<text x="0" y="-10" font-size="14" font-weight="bold">{escape(label)}</text>\n'
                 f'<rect width="{PLOT_W:.0f}" height="{st.frame.height:.1f}" fill="none" '
-                f'stroke="#cccccc"/>\n<g {plot_attrs}>\n'
+                f'stroke="#cccccc"/>\n<g {PLOT_ATTRS}>\n'
             ).encode()
         )
         s.extend(groups)
@@ -1106,13 +1098,7 @@ def render_diagnosis(tp: ToolPath, ann: Annotations, diagnosis: object, view: st
     _check(tp, ann)
     st = strokes(tp, view)
     rapid = _colour((ann.rapid_colour,), 0)
-    styles = {
-        -1: (
-            f'stroke="{rapid}" stroke-width="{round(RAPID_STROKE_PX * Q)}" '
-            f'stroke-dasharray="{4 * Q} {3 * Q}"',
-            "rapid or not measured",
-        )
-    }
+    styles = {-1: _rapid_style(ann, "rapid or not measured")}
     for c, lab in enumerate(ann.class_labels):
         styles[c] = (f'stroke="{_colour(ann.class_colours, c)}"', lab)
     # Draw the widest gaps on top: order the severities by distance from "within".
@@ -1146,27 +1132,14 @@ def render_diagnosis(tp: ToolPath, ann: Annotations, diagnosis: object, view: st
         f"{tp.source}: measured against predicted feed ({d.baseline} baseline), "
         f"{VIEW_NAMES[view]} view"
     )
-    s: list[bytes] = [
-        (
-            f'<?xml version="1.0" encoding="UTF-8"?>\n'
-            f'<svg xmlns="http://www.w3.org/2000/svg" version="1.1" width="{width:.0f}" '
-            f'height="{height:.0f}" viewBox="0 0 {width:.0f} {height:.0f}" '
-            f'font-family="sans-serif" font-size="12">\n<title>ncperf diagnose: {head}</title>\n'
-            f'<rect width="{width:.0f}" height="{height:.0f}" fill="#ffffff"/>\n'
-            f'<text x="{MARGIN:.0f}" y="28" font-size="16" font-weight="bold">{head}</text>\n'
-        ).encode()
-    ]
-    plot_attrs = (
-        f'transform="scale({1 / Q:g})" fill="none" stroke-width="{round(STROKE_PX * Q)}"'
-        f' stroke-linecap="round" stroke-linejoin="round"'
-    )
+    s: list[bytes] = [_document_head(width, height, f"ncperf diagnose: {head}", head)]
     s.append(
         (
             f'<g transform="translate({MARGIN:.0f},{TOP:.0f})">\n'
             f'<text x="0" y="-10" font-size="14" font-weight="bold">Gap along the path '
             f"(before the chosen effects)</text>\n"
             f'<rect width="{PLOT_W:.0f}" height="{fr.height:.1f}" fill="none" '
-            f'stroke="#cccccc"/>\n<g {plot_attrs}>\n'
+            f'stroke="#cccccc"/>\n<g {PLOT_ATTRS}>\n'
         ).encode()
     )
     s += g_rapid + groups
