@@ -418,7 +418,12 @@ def points_along(tp: ToolPath, k: NDArray[np.int64], d: NDArray[np.float64]) -> 
 
 
 def boundary_caps(ev: Evaluation, cap: NDArray[np.float64]) -> NDArray[np.float64]:
-    """(n + 1,) speed cap at every move boundary (mm/s); 0 at the ends and at stops."""
+    """(n + 1,) speed cap at every move boundary (mm/s).
+
+    0 at the program's ends and wherever the chain breaks: exact stops (G61/G60/G9, M0/M1),
+    dwells, rapid <-> feed and rapid <-> rapid changes, operation changes. Elsewhere the
+    lower of the two moves' caps and the junction's predicted feed.
+    """
     tp = ev.toolpath
     n = tp.n
     b = np.zeros(n + 1)
@@ -426,7 +431,7 @@ def boundary_caps(ev: Evaluation, cap: NDArray[np.float64]) -> NDArray[np.float6
         return b
     inner = np.minimum(cap[:-1], cap[1:])
     joined = np.zeros(n - 1, dtype=bool)
-    joined[tp.junctions] = True
+    joined[tp.junctions] = True  # feed -> feed within one operation
     stop = (tp.path_mode[:-1] == PathMode.EXACT_STOP) | (tp.dwell[:-1] > 0)
     inner = np.where(joined & ~stop, inner, 0.0)
     inner[ev.junction] = np.minimum(inner[ev.junction], ev.junction_feed)

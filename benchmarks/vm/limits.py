@@ -18,6 +18,7 @@ from numpy.typing import NDArray
 from core import Indicator, Machine, Ncperf, PathMode, ToolPath, combine
 from core import geometry as g
 from core.indicators import Evaluation
+from core.profile import boundary_caps
 from core.toolpath import MoveKind
 from plugins import tangential
 
@@ -203,29 +204,6 @@ def _compress(
             )
         )
     return out
-
-
-def boundary_caps(toolpath: ToolPath, evaluation: Evaluation, cap: NDArray) -> NDArray:
-    """(n + 1,) speed cap at every move boundary (mm/s).
-
-    0 at the program's ends and wherever the chain breaks: exact stops (G61/G60/G9, M0/M1),
-    dwells, rapid <-> feed and rapid <-> rapid changes, operation changes. Elsewhere the
-    lower of the two moves' caps and the junction's predicted feed.
-    """
-    tp = toolpath
-    n = tp.n
-    b = np.zeros(n + 1)
-    if n < 2:
-        return b
-    inner = np.minimum(cap[:-1], cap[1:])
-    joined = np.zeros(n - 1, dtype=bool)
-    joined[tp.junctions] = True  # feed -> feed within one operation
-    stop = (tp.path_mode[:-1] == PathMode.EXACT_STOP) | (tp.dwell[:-1] > 0)
-    inner = np.where(joined & ~stop, inner, 0.0)
-    ev = evaluation
-    inner[ev.junction] = np.minimum(inner[ev.junction], ev.junction_feed)
-    b[1:-1] = inner
-    return b
 
 
 def build_segments(
@@ -439,7 +417,7 @@ def controller_setup(
         cap = np.minimum(cap, arc_caps(tp, m_motion, params["factor"], jerk=False))
     acc, jerk = tangential_limits(tp, m_motion)
     segments, limits = build_segments(
-        tp, m_eval, indicators, cap, boundary_caps(tp, ev, cap), acc, jerk, window
+        tp, m_eval, indicators, cap, boundary_caps(ev, cap), acc, jerk, window
     )
     return ControllerSetup(
         toolpath=tp, machine=m_motion, evaluation=ev, segments=segments, limits=limits
