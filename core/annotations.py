@@ -34,6 +34,13 @@ ZONE_THRESHOLD = 0.10
 VIEWS = ("xy", "xz", "yz", "iso")
 
 
+def _file_target(target: object) -> None:
+    """Check a drawing target's view and keep its path as ``str`` (the targets are frozen)."""
+    object.__setattr__(target, "path", os.fspath(target.path))
+    if target.view not in VIEWS:
+        raise ValueError(f"view must be one of {VIEWS}, got {target.view!r}")
+
+
 @dataclass(frozen=True)
 class FileTarget:
     """A file to draw into, with the projection to use.
@@ -50,9 +57,7 @@ class FileTarget:
     view: str = "xy"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "path", os.fspath(self.path))
-        if self.view not in VIEWS:
-            raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
+        _file_target(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -73,9 +78,7 @@ class ComparisonTarget:
     view: str = "xy"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "path", os.fspath(self.path))
-        if self.view not in VIEWS:
-            raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
+        _file_target(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -95,9 +98,7 @@ class DiagnosisTarget:
     view: str = "xy"
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "path", os.fspath(self.path))
-        if self.view not in VIEWS:
-            raise ValueError(f"view must be one of {VIEWS}, got {self.view!r}")
+        _file_target(self)
 
 
 @dataclass(frozen=True)
