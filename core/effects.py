@@ -32,7 +32,7 @@ from numpy.typing import NDArray
 from core import geometry as g
 from core.errors import MachineError, UsageError
 from core.machine import Machine
-from core.toolpath import ToolPath
+from core.toolpath import MoveKind, ToolPath
 
 
 @dataclass(frozen=True)
@@ -214,7 +214,7 @@ def arc_caps(tp: ToolPath, machine: Machine, *, jerk: bool = True) -> NDArray[np
         return out
     n = tp.normal[a]
     u0 = g.unit(g.radial(tp.start[a], tp.center[a], n))
-    ccw = (tp.kind[a] == 3)[:, None]
+    ccw = (tp.kind[a] == MoveKind.ARC_CCW)[:, None]
     w0 = np.where(ccw, np.cross(n, u0), -np.cross(n, u0))
     share_n = g.max_share(u0, w0, tp.sweep[a][:, None])
     radius = 1.0 / np.abs(tp.curvature[a])

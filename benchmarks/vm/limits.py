@@ -17,9 +17,9 @@ from numpy.typing import NDArray
 
 from core import Indicator, Machine, Ncperf, PathMode, ToolPath, combine
 from core import geometry as g
+from core.effects import arc_caps
 from core.indicators import Evaluation
 from core.profile import boundary_caps
-from core.toolpath import MoveKind
 from plugins import tangential
 
 from .planner import Limits
@@ -86,43 +86,6 @@ def tangential_limits(
     acc[bad] = machine.max_acceleration.min()
     jerk[bad] = machine.max_jerk.min()
     return acc, jerk
-
-
-def arc_caps(
-    toolpath: ToolPath, machine: Machine, normal_factor: float = 1.0, *, jerk: bool = True
-) -> NDArray:
-    """(n,) centripetal cap of programmed arcs (mm/s; inf for lines and rapids).
-
-    v <= min_k sqrt(f A_k rho / n_k) and (with ``jerk``) v <= min_k cbrt(J_k rho^2 / t_k):
-    rho = 1 / curvature (R on planar arcs), n_k the largest share of axis k in the principal
-    normal over the sweep (the normal is -r/|r|, turning with the sweep), t_k the largest
-    share in the tangent (:attr:`ToolPath.axis_share`), f the normal-acceleration factor.
-    """
-    tp = toolpath
-    out = np.full(tp.n, np.inf)
-    idx = np.flatnonzero(tp.is_arc)
-    if idx.size == 0:
-        return out
-    nrm = tp.normal[idx]
-    r0 = g.unit(g.radial(tp.start[idx], tp.center[idx], nrm))
-    sign = np.where(tp.kind[idx] == MoveKind.ARC_CCW, 1.0, -1.0)[:, None]
-    turned = sign * np.cross(nrm, r0)  # r0 rotated by +90 deg in the direction of travel
-    n_share = g.max_share(r0, turned, np.minimum(tp.sweep[idx], 2 * np.pi)[:, None])
-    t_share = tp.axis_share[idx]
-    rho = 1.0 / np.abs(tp.curvature[idx])
-    with np.errstate(divide="ignore", invalid="ignore"):
-        v_acc = np.where(
-            n_share > 0,
-            np.sqrt(normal_factor * machine.max_acceleration * rho[:, None] / n_share),
-            np.inf,
-        ).min(axis=1)
-        v_jerk = np.where(
-            t_share > 0, np.cbrt(machine.max_jerk * rho[:, None] ** 2 / t_share), np.inf
-        ).min(axis=1)
-    if not jerk:
-        v_jerk = np.full(idx.size, np.inf)
-    out[idx] = np.minimum(v_acc, v_jerk)
-    return out
 
 
 def _subset(ind: Indicator, keep: NDArray[np.bool_]) -> Indicator:
@@ -414,7 +377,8 @@ def controller_setup(
         cap = np.minimum(cap, arc_caps(tp, m_motion))
     elif effect == "normal_acceleration_factor":
         # programmed arcs: their normal acceleration gets the same share (no jerk part)
-        cap = np.minimum(cap, arc_caps(tp, m_motion, params["factor"], jerk=False))
+        m_normal = dataclasses.replace(m_motion, normal_acceleration_factor=params["factor"])
+        cap = np.minimum(cap, arc_caps(tp, m_normal, jerk=False))
     acc, jerk = tangential_limits(tp, m_motion)
     segments, limits = build_segments(
         tp, m_eval, indicators, cap, boundary_caps(ev, cap), acc, jerk, window
