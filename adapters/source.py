@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from core.errors import InputError
+from core.model.errors import InputError
 
 #: A line longer than this is not a program (LinuxCNC stops at 256 characters, Fanuc at a
 #: few hundred, CAM systems continue longer CL records with "$"); without the limit a 50 MB

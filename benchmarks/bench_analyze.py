@@ -59,7 +59,7 @@ def run_cli(program: Path, svg: Path) -> tuple[float, float]:
 def stages(program: Path, svg: Path) -> dict[str, float]:
     """Seconds per stage of one in-process run."""
     from core import FileTarget, Ncperf, build_annotations, load_preset
-    from core.profile import build_profile
+    from core.engine.profile import build_profile
 
     t = {}
     t0 = time.perf_counter()

@@ -27,8 +27,8 @@ import numpy as np
 
 from adapters.svg.render import write_svg
 from core import Ncperf, build_annotations, load_preset, make_plugin_manager
-from core import geometry as g
-from core.toolpath import MoveKind, ToolPath, empty_columns
+from core.model import geometry as g
+from core.model.toolpath import MoveKind, ToolPath, empty_columns
 
 PLUGINS = (
     "plugins.tangential",

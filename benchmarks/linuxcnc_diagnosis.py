@@ -6,7 +6,7 @@ Not a test: ``PYTHONPATH=. python benchmarks/linuxcnc_diagnosis.py [--machine PR
 are diagnosed together: effects are fitted on the even-numbered programs and measured on the
 odd-numbered ones (other programs as held-out data), once against the paper's point model
 and once against the full profile. The chosen effects, printed as ``[effects.NAME]`` tables,
-are what ``core/presets/linuxcnc-sim.toml`` carries; with ``--machine linuxcnc-sim`` (the
+are what ``core/model/presets/linuxcnc-sim.toml`` carries; with ``--machine linuxcnc-sim`` (the
 folded preset) each program is then diagnosed on its own against the profile, where no
 effect should stand out.
 """
@@ -20,10 +20,10 @@ import sys
 from pathlib import Path
 
 from core import Ncperf
-from core.align import align
-from core.diagnose import diagnose, diagnose_cases, toml_snippet
-from core.effects import setup_for
-from core.machine import resolve_machine
+from core.diagnosis.align import align
+from core.diagnosis.diagnose import diagnose, diagnose_cases, toml_snippet
+from core.engine.effects import setup_for
+from core.model.machine import resolve_machine
 
 SUITE = Path(__file__).resolve().parents[2] / "shared" / "data" / "linuxcnc" / "suite"
 

@@ -28,10 +28,10 @@ from pathlib import Path
 import numpy as np
 
 from core import Ncperf, load_preset
-from core.effects import setup_for
-from core.predict import predict
-from core.profile import build_profile
-from core.toolpath import MoveKind
+from core.engine.effects import setup_for
+from core.engine.predict import predict
+from core.engine.profile import build_profile
+from core.model.toolpath import MoveKind
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
 SUITE = SHARED / "data" / "linuxcnc" / "suite"

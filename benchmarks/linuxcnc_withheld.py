@@ -34,10 +34,10 @@ from pathlib import Path
 import numpy as np
 
 from core import Ncperf
-from core.align import align
-from core.diagnose import diagnose_cases
-from core.effects import setup_for
-from core.machine import resolve_machine
+from core.diagnosis.align import align
+from core.diagnosis.diagnose import diagnose_cases
+from core.engine.effects import setup_for
+from core.model.machine import resolve_machine
 
 SHARED = Path(__file__).resolve().parents[2] / "shared"
 SUITE = SHARED / "data" / "linuxcnc" / "suite"

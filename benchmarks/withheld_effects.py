@@ -4,7 +4,7 @@ Not a test: ``PYTHONPATH=.:benchmarks python benchmarks/withheld_effects.py [--s
 [--draws K] [--full]`` (about 15 minutes on 2 cores with the defaults).
 
 Every case runs a set of bundled example programs on the reference virtual machine
-(``benchmarks/vm``, an interpolator independent of ``core.profile``) with **one** controller
+(``benchmarks/vm``, an interpolator independent of ``core.engine.profile``) with **one** controller
 effect switched on at a random strength (seeded: the same seed gives the same cases),
 records 1 ms traces, and hands them to the diagnosis without saying which effect was on. The
 diagnosis fits every effect it knows on alternate programs and measures it on the others
@@ -36,11 +36,11 @@ from pathlib import Path
 import numpy as np
 
 from core import Ncperf
-from core.align import align
-from core.diagnose import diagnose_cases
-from core.effects import setup_for
-from core.machine import Machine, resolve_machine
-from core.trace import Trace
+from core.diagnosis.align import align
+from core.diagnosis.diagnose import diagnose_cases
+from core.engine.effects import setup_for
+from core.model.machine import Machine, resolve_machine
+from core.model.trace import Trace
 
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 from vm.virtual_machine import simulate  # noqa: E402

@@ -5,7 +5,7 @@ Importing ``core`` builds no plugin manager and imports no adapter or plugin.
 
 from __future__ import annotations
 
-from core.annotations import (
+from core.view.annotations import (
     Annotations,
     ComparisonTarget,
     DiagnosisTarget,
@@ -13,14 +13,14 @@ from core.annotations import (
     Zone,
     build_annotations,
 )
-from core.errors import InputError, MachineError, NcperfError, Notice, UsageError
+from core.model.errors import InputError, MachineError, NcperfError, Notice, UsageError
 from core.facade import Analysis, Ncperf
 from core.hookspecs import hookimpl
-from core.indicators import Evaluation, Indicator, combine, min_block_length
-from core.machine import Machine, load_machine_file, load_preset, preset_names, resolve_machine
+from core.engine.indicators import Evaluation, Indicator, combine, min_block_length
+from core.model.machine import Machine, load_machine_file, load_preset, preset_names, resolve_machine
 from core.plugins import BUILTIN_PLUGINS, make_plugin_manager
-from core.tolerances import TOL, Tolerances
-from core.toolpath import ExtractOptions, MoveKind, PathMode, ToolPath
+from core.model.tolerances import TOL, Tolerances
+from core.model.toolpath import ExtractOptions, MoveKind, PathMode, ToolPath
 
 __version__ = "0.1.0"
 

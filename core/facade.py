@@ -10,15 +10,15 @@ from dataclasses import dataclass
 
 import pluggy
 
-from core.annotations import Annotations, build_annotations
-from core.effects import Effect
-from core.errors import UsageError
-from core.indicators import Evaluation, Indicator, combine
-from core.machine import Machine
+from core.view.annotations import Annotations, build_annotations
+from core.engine.effects import Effect
+from core.model.errors import UsageError
+from core.engine.indicators import Evaluation, Indicator, combine
+from core.model.machine import Machine
 from core.plugins import make_plugin_manager
-from core.profile import Profile, build_profile
-from core.toolpath import ExtractOptions, ToolPath
-from core.trace import Trace, TraceOptions
+from core.engine.profile import Profile, build_profile
+from core.model.toolpath import ExtractOptions, ToolPath
+from core.model.trace import Trace, TraceOptions
 
 
 @dataclass(frozen=True, eq=False)
@@ -84,8 +84,8 @@ class Ncperf:
         tp = self.extract(source, options)
         if machine.effects:
             # Effects the machine file switches on are part of its model (issue 5).
-            from core.effects import setup_for
-            from core.predict import predict
+            from core.engine.effects import setup_for
+            from core.engine.predict import predict
 
             pred = predict(self, tp, setup_for(machine, self.effects()))
             ev, profile = pred.evaluation, pred.profile

@@ -1,6 +1,6 @@
 """The ncperf hook specifications: the paper's three tasks (sec. 3, Figure 5).
 
-* A1 extract: a source (a file, a host document) -> a :class:`~core.toolpath.ToolPath`.
+* A1 extract: a source (a file, a host document) -> a :class:`~core.model.toolpath.ToolPath`.
 * A2 evaluate: tool path + machine -> indicator results.
 * A3 display: tool path + colour annotations + a target -> an output.
 
@@ -17,12 +17,12 @@ from typing import TYPE_CHECKING
 import pluggy
 
 if TYPE_CHECKING:
-    from core.annotations import Annotations
-    from core.effects import Effect
-    from core.indicators import Indicator
-    from core.machine import Machine
-    from core.toolpath import ExtractOptions, ToolPath
-    from core.trace import Trace, TraceOptions
+    from core.view.annotations import Annotations
+    from core.engine.effects import Effect
+    from core.engine.indicators import Indicator
+    from core.model.machine import Machine
+    from core.model.toolpath import ExtractOptions, ToolPath
+    from core.model.trace import Trace, TraceOptions
 
 PROJECT = "ncperf"
 
@@ -36,7 +36,7 @@ def ncperf_extract(source: object, options: ExtractOptions) -> ToolPath | None:
 
     Stops at the first non-None result: an adapter returns None for a source it
     does not recognise (another extension, another host), and raises
-    :class:`~core.errors.InputError` for a source it recognises but cannot read
+    :class:`~core.model.errors.InputError` for a source it recognises but cannot read
     faithfully.
 
     :param source: a file path (``str`` or ``os.PathLike``) or a host object
@@ -93,7 +93,7 @@ def ncperf_read_trace(source: object, options: TraceOptions) -> Trace | None:
     """Read a measured trace (positions, feed, program lines over time).
 
     Stops at the first non-None result: a reader returns None for a source it does not
-    recognise, and raises :class:`~core.errors.InputError` (file and line) for one it
+    recognise, and raises :class:`~core.model.errors.InputError` (file and line) for one it
     recognises but cannot read faithfully (non-monotone time, NaN rows...).
 
     :param source: a file path or a host object.
@@ -108,5 +108,5 @@ def ncperf_effects() -> list[Effect]:
 
     Every plugin is called; the effects' names must be unique.
 
-    :returns: a list of :class:`~core.effects.Effect`.
+    :returns: a list of :class:`~core.engine.effects.Effect`.
     """

@@ -15,7 +15,7 @@ from collections.abc import Iterable
 import pluggy
 
 from core import hookspecs
-from core.errors import UsageError
+from core.model.errors import UsageError
 
 #: Built-in plugins, by module name; registered under that name.
 BUILTIN_PLUGINS: tuple[str, ...] = (

@@ -28,7 +28,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
-from core import geometry as g
+from core.model import geometry as g
 
 NAME = "curvature"
 LABELS = ("jerk X", "jerk Y", "jerk Z")

@@ -43,7 +43,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
-from core import geometry as g
+from core.model import geometry as g
 
 NAME = "tangential"
 AXES = ("X", "Y", "Z")

@@ -9,7 +9,7 @@ import numpy as np
 import pytest
 
 from core import Machine, Ncperf, ToolPath, make_plugin_manager
-from core.toolpath import MoveKind, empty_columns
+from core.model.toolpath import MoveKind, empty_columns
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = Path(os.environ.get("NCPERF_SHARED", ROOT.parent / "shared"))
@@ -83,7 +83,7 @@ def path(moves: list[dict], feed: float = 100.0) -> ToolPath:
         pos = np.asarray(m["end"], dtype=float)
     arcs = cols["kind"] >= MoveKind.ARC_CW
     if arcs.any():
-        from core.geometry import arc_sweep
+        from core.model.geometry import arc_sweep
 
         cols["sweep"][arcs] = arc_sweep(
             cols["start"][arcs],

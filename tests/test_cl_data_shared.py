@@ -10,7 +10,7 @@ import pytest
 
 from adapters.cl_data import read_cl
 from core import InputError, MoveKind, load_preset
-from core import geometry as g
+from core.model import geometry as g
 from tests.conftest import shared
 
 READABLE = [

@@ -11,11 +11,11 @@ import numpy as np
 import pytest
 
 from core import InputError
-from core.align import align, isotonic
-from core.diagnose import diagnose
-from core.effects import Setup
-from core.predict import predict
-from core.trace import Trace
+from core.diagnosis.align import align, isotonic
+from core.diagnosis.diagnose import diagnose
+from core.engine.effects import Setup
+from core.engine.predict import predict
+from core.model.trace import Trace
 from tests.conftest import machine, path
 
 INF = float("inf")
@@ -41,7 +41,7 @@ def synthetic_trace(nc, tp, setup, dt=0.001, with_positions=True):
     tau = setup.servo_tau
     pred = predict(nc, tp, dataclasses.replace(setup, servo_tau=0.0))
     t, s, v = pred.signal()
-    from core.align import _point_at
+    from core.diagnosis.align import _point_at
 
     pos = _point_at(tp, s)
     if tau > 0:
@@ -100,7 +100,7 @@ def test_alignment_keeps_a_plunge_apart_from_the_retract_it_retraces(nc, with_li
 def test_a_trace_in_other_units_is_refused(nc, tmp_path):
     """The same motion recorded in inches, read as mm: low alignment quality, no diagnosis;
     read with --trace-units inch, it aligns, at the arc lengths of the mm trace."""
-    from core.trace import TraceOptions
+    from core.model.trace import TraceOptions
 
     tp = zigzag()
     tr = synthetic_trace(nc, tp, Setup(machine=machine()))
@@ -190,7 +190,7 @@ def test_a_gap_in_the_recording_is_left_out_not_filled_in(nc):
     """Samples missing over 0.5 s (the recorder stalled) in a trace of the model itself: the
     stretch they would have covered is not compared (no feed is invented across it), and
     nothing is named."""
-    from core.diagnose import resample
+    from core.diagnosis.diagnose import resample
 
     tp = zigzag()
     base = Setup(machine=machine(jerk=(INF, INF, INF)))
@@ -234,8 +234,8 @@ def test_a_machine_with_folded_effects_starts_from_them(nc):
     actually runs at 0.72 of F (0.9 x 0.8) with the same arcs. The fit finds the further
     scale 0.8 and suggests 0.72 for the file. On a trace of the folded machine itself,
     nothing stands out and arc_acceleration stays at its folded 0.5 (not reset to 1)."""
-    from core.diagnose import toml_snippet
-    from core.effects import setup_for
+    from core.diagnosis.diagnose import toml_snippet
+    from core.engine.effects import setup_for
 
     tp = zigzag()
     folded = (("feed_override", {"scale": 0.9}, 1), ("arc_acceleration", {"factor": 0.5}, 2))

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 
 from core import MachineError, UsageError
-from core.effects import Setup, setup_for
-from core.machine import machine_from_toml_text
-from core.predict import predict
+from core.engine.effects import Setup, setup_for
+from core.model.machine import machine_from_toml_text
+from core.engine.predict import predict
 from tests.conftest import machine, path
 
 INF = float("inf")
@@ -124,7 +124,7 @@ def test_lookahead_depth_with_a_jerk_limit(nc, effects):
     """Jerk-limited stops: from v a stop takes v sqrt(v / J) while v < A^2 / J, so within
     4 mm (four 1 mm blocks) at J 5000, A 2500: v = (16 x 5000)^(1/3) = 43.089 mm/s; at
     J 50000 within 100 mm: v^2 / A + v A / J = 200 gives v = 647.36 mm/s."""
-    from core.profile import stop_speed
+    from core.engine.profile import stop_speed
 
     v = stop_speed([4.0, 100.0, 0.5], [2500.0, 2500.0, 2500.0], [5000.0, 50000.0, INF])
     assert v == pytest.approx([80000 ** (1 / 3), 1250 * (math.sqrt(0.0025 + 0.32) - 0.05), 50.0])

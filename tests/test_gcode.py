@@ -183,7 +183,7 @@ def test_arc_planes(plane, block, normal, mid):
     # G19 seen from +X: Y right, Z up; from y0 to y10 clockwise passes over the top, z = +5.
     tp = read(f"G21 G1 X0 Y0 Z0 F60\n{plane} {block}\n")
     assert np.allclose(tp.normal[-1], normal)
-    from core.geometry import sample_arcs
+    from core.model.geometry import sample_arcs
 
     pts = sample_arcs(
         tp.start[-1:],

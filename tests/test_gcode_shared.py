@@ -8,8 +8,8 @@ import numpy as np
 import pytest
 
 from adapters.gcode import read_gcode
-from core.geometry import sample_arcs
-from core.toolpath import MoveKind
+from core.model.geometry import sample_arcs
+from core.model.toolpath import MoveKind
 from tests.conftest import SHARED, shared
 
 REAL = [

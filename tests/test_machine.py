@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 
 from core import MachineError, UsageError, load_machine_file, load_preset, preset_names
-from core.machine import resolve_machine
+from core.model.machine import resolve_machine
 
 GOOD = """name = "Test mill"
 [axes.X]
@@ -119,7 +119,7 @@ def test_840d_preset_marks_its_assumptions():
     """Every value of the 840D preset but t_int is flagged as an assumption next to it."""
     from importlib import resources
 
-    text = (resources.files("core") / "presets" / "siemens-840d.toml").read_text()
+    text = (resources.files("core.model") / "presets" / "siemens-840d.toml").read_text()
     for line in text.splitlines():
         if "=" in line and not line.startswith(("#", "name")):
             key = line.split("=")[0].strip()

@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from core import geometry as g
+from core.model import geometry as g
 from plugins import curvature, tangential
 from tests.conftest import machine, path
 

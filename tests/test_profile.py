@@ -8,7 +8,7 @@ import math
 import numpy as np
 import pytest
 
-from core.profile import build_profile, effective_acceleration
+from core.engine.profile import build_profile, effective_acceleration
 from tests.conftest import machine, path
 
 INF = float("inf")

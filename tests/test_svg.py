@@ -23,9 +23,9 @@ from core import (
     load_preset,
     make_plugin_manager,
 )
-from core import geometry as g
-from core.annotations import VIEWS
-from core.toolpath import MoveKind, empty_columns, polyline
+from core.model import geometry as g
+from core.view.annotations import VIEWS
+from core.model.toolpath import MoveKind, empty_columns, polyline
 
 PLUGINS = (
     "plugins.tangential",
@@ -36,7 +36,7 @@ PLUGINS = (
 )
 NS = "{http://www.w3.org/2000/svg}"
 
-# The 840D preset (core/presets/siemens-840d.toml), in mm and s.
+# The 840D preset (core/model/presets/siemens-840d.toml), in mm and s.
 T_INT = 0.012  # s
 TIT = 0.01  # mm
 JERK = 5.0 * 1000.0  # mm/s^3

@@ -8,9 +8,9 @@ import numpy as np
 import pytest
 
 from core import ToolPath
-from core.annotations import build_annotations, find_zones
-from core.profile import build_profile
-from core.toolpath import MoveKind, drop_zero_length, empty_columns, polyline
+from core.view.annotations import build_annotations, find_zones
+from core.engine.profile import build_profile
+from core.model.toolpath import MoveKind, drop_zero_length, empty_columns, polyline
 from tests.conftest import machine, path
 
 

@@ -15,7 +15,7 @@ from benchmarks.vm.effects import EFFECT_DOCS
 from benchmarks.vm.planner import stop_distance
 from benchmarks.vm.virtual_machine import EFFECTS, main, simulate
 from core import load_preset
-from core.profile import build_profile
+from core.engine.profile import build_profile
 from tests.conftest import ROOT, machine, path, shared
 
 INF = float("inf")

@@ -51,10 +51,10 @@ from numpy.typing import NDArray
 from adapters.cl_data import words as W
 from adapters.cl_data.records import Record, leading_numbers, number, numbers, records
 from adapters.cl_data.source import FastGotos, Source
-from core import geometry as g
-from core.errors import InputError, Notes
-from core.tolerances import TOL
-from core.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
+from core.model import geometry as g
+from core.model.errors import InputError, Notes
+from core.model.tolerances import TOL
+from core.model.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
 
 INCH = 25.4
 PLUS_Z = (0.0, 0.0, 1.0)

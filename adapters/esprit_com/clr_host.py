@@ -16,7 +16,7 @@ from pathlib import Path
 from types import ModuleType
 
 from adapters.esprit_com.object_model import INDEXER, METHODS, PROG_ID
-from core.errors import UsageError
+from core.model.errors import UsageError
 
 #: Where ``scripts/setup_esprit_emulation.sh`` writes the emulation; this variable overrides it
 #: (e.g. for an installed, non-editable ncperf).
@@ -88,7 +88,7 @@ def load_emulation() -> ModuleType:
 def attach_running_esprit() -> LateBound:
     """The running ESPRIT's Application object, reached through COM.
 
-    Raises :class:`~core.errors.UsageError` saying why ESPRIT could not be reached (not
+    Raises :class:`~core.model.errors.UsageError` saying why ESPRIT could not be reached (not
     Windows, no pythonnet, no running ESPRIT).
     """
     why = "ESPRIT could not be reached"

@@ -27,11 +27,11 @@ from numpy.typing import NDArray
 from adapters.esprit_com import object_model as om
 from adapters.esprit_com.clr_host import exception_text
 from adapters.esprit_com.extract import document_label
-from core import geometry as g
-from core.annotations import Annotations
-from core.errors import NcperfError
-from core.tolerances import TOL
-from core.toolpath import MoveKind, ToolPath
+from core.model import geometry as g
+from core.view.annotations import Annotations
+from core.model.errors import NcperfError
+from core.model.tolerances import TOL
+from core.model.toolpath import MoveKind, ToolPath
 
 #: Chords per radian for helices: pi/8 keeps the chord within 2 % of the radius of the helix.
 HELIX_CHORDS_PER_RAD = 8.0 / np.pi

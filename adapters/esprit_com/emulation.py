@@ -18,11 +18,11 @@ from numpy.typing import NDArray
 
 from adapters.esprit_com import object_model as om
 from adapters.esprit_com.clr_host import LateBound, load_emulation
-from core import geometry as g
-from core.errors import InputError
-from core.output import atomic_writer
-from core.tolerances import TOL
-from core.toolpath import MoveKind, ToolPath
+from core.model import geometry as g
+from core.model.errors import InputError
+from core.cli.output import atomic_writer
+from core.model.tolerances import TOL
+from core.model.toolpath import MoveKind, ToolPath
 
 #: Backend names: the Python twin, the .NET emulation as pythonnet shows it, and the .NET
 #: emulation reached by name through reflection (the code path of a live ESPRIT over COM).

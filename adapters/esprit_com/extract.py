@@ -1,4 +1,4 @@
-"""A1: the tool paths of an ESPRIT document's operations as one :class:`~core.toolpath.ToolPath`.
+"""A1: the tool paths of an ESPRIT document's operations as one :class:`~core.model.toolpath.ToolPath`.
 
 The paper's extractor (Tapie et al., sec. 3.1) "explores the tool path object selected in the
 workspace of ESPRIT" and reads its segments, arcs and feeds. Here every ``PartOperation``
@@ -20,10 +20,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adapters.esprit_com import object_model as om
-from core import geometry as g
-from core.errors import InputError, Notice
-from core.tolerances import TOL
-from core.toolpath import MoveKind, ToolPath, drop_zero_length, empty_columns
+from core.model import geometry as g
+from core.model.errors import InputError, Notice
+from core.model.tolerances import TOL
+from core.model.toolpath import MoveKind, ToolPath, drop_zero_length, empty_columns
 
 SCOPES = ("auto", "selected", "all")
 PER_MIN = 60.0

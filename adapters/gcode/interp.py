@@ -16,10 +16,10 @@ from numpy.typing import NDArray
 
 from adapters.gcode import words as W
 from adapters.gcode.lexer import Source, Words
-from core import geometry as g
-from core.errors import InputError, Notes
-from core.tolerances import TOL
-from core.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
+from core.model import geometry as g
+from core.model.errors import InputError, Notes
+from core.model.tolerances import TOL
+from core.model.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
 
 INCH = 25.4
 AXIS_LETTERS = "XYZ"

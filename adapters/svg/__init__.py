@@ -1,7 +1,7 @@
 """A3: the SVG fallback display, the paper's Figures 10 and 11 in one file.
 
 Recognises ``.svg`` targets: a path (``str`` or ``os.PathLike``, drawn in the
-top view) or a :class:`~core.annotations.FileTarget` (its own view). The
+top view) or a :class:`~core.view.annotations.FileTarget` (its own view). The
 drawing itself is in :mod:`adapters.svg.render`.
 """
 
@@ -11,7 +11,7 @@ import os
 
 from adapters.svg.render import render_comparison, render_diagnosis, render_svg, write_svg
 from core import Annotations, ComparisonTarget, DiagnosisTarget, FileTarget, ToolPath, hookimpl
-from core.output import atomic_writer
+from core.cli.output import atomic_writer
 
 __all__ = ["ncperf_display", "render_comparison", "render_svg", "svg_target", "write_svg"]
 

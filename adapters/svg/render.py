@@ -37,10 +37,10 @@ from xml.sax.saxutils import escape
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core import geometry as g
-from core.annotations import VIEWS, Annotations, Zone
-from core.output import atomic_writer
-from core.toolpath import MoveKind, ToolPath
+from core.model import geometry as g
+from core.view.annotations import VIEWS, Annotations, Zone
+from core.cli.output import atomic_writer
+from core.model.toolpath import MoveKind, ToolPath
 
 # ---------------------------------------------------------------- layout, px
 #: Width of each panel's plot area; the height follows the drawing's aspect.
@@ -1090,7 +1090,7 @@ def render_diagnosis(tp: ToolPath, ann: Annotations, diagnosis: object, view: st
     """The path coloured by gap (measured against predicted feed), the gap zones numbered,
     and measured against predicted feed over arc length for the worst zones.
 
-    ``diagnosis`` is a :class:`core.diagnose.Diagnosis`; ``ann`` its annotations.
+    ``diagnosis`` is a :class:`core.diagnosis.diagnose.Diagnosis`; ``ann`` its annotations.
     """
     d = diagnosis
     if view not in PROJECTIONS:

@@ -23,7 +23,7 @@ from pathlib import Path
 import numpy as np
 
 from core import InputError, Notice, hookimpl
-from core.trace import Trace, TraceOptions
+from core.model.trace import Trace, TraceOptions
 
 INCH = 25.4
 #: A pause longer than this many median sample periods is a gap in the recording.

@@ -3,7 +3,7 @@
 Not a test: ``PYTHONPATH=.:benchmarks python benchmarks/vm/agreement.py [--all]`` from the
 repository root. Prints, for the example programs on the ``linuxcnc-sim`` and
 ``siemens-840d`` presets, the virtual machine's cycle time (1 ms cycles), ncperf's
-(``core.profile``), their difference, and the virtual machine's cycles per second of wall
+(``core.engine.profile``), their difference, and the virtual machine's cycles per second of wall
 time. ``--all`` adds every example and the programs of ../shared/data/linuxcnc/suite.
 """
 
@@ -15,7 +15,7 @@ import time
 from pathlib import Path
 
 from core import Ncperf, load_preset
-from core.profile import build_profile
+from core.engine.profile import build_profile
 from vm.virtual_machine import simulate
 
 ROOT = Path(__file__).resolve().parents[2]

@@ -2,7 +2,7 @@
 
 The corner and block limits are the paper's models as ncperf's plugins compute them (that is
 the point: the controller's *limits* are the models, its *motion* is independent of
-``core.profile``). Each effect either changes what the plugins are evaluated with (machine,
+``core.engine.profile``). Each effect either changes what the plugins are evaluated with (machine,
 tool path), edits their indicator records before they are combined, or adds a cap.
 """
 
@@ -16,10 +16,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import Indicator, Machine, Ncperf, PathMode, ToolPath, combine
-from core import geometry as g
-from core.effects import arc_caps
-from core.indicators import Evaluation
-from core.profile import boundary_caps
+from core.model import geometry as g
+from core.engine.effects import arc_caps
+from core.engine.indicators import Evaluation
+from core.engine.profile import boundary_caps
 from plugins import tangential
 
 from .planner import Limits

@@ -1,6 +1,6 @@
 """The virtual machine's interpolator: a jerk-limited path-speed planner stepped at the cycle.
 
-This is the motion half of the reference controller, written without ``core.profile``: it
+This is the motion half of the reference controller, written without ``core.engine.profile``: it
 knows nothing of ncperf's forward/backward passes or effective accelerations. It takes the
 limits (:class:`Limits`) and steps time. Its units are the segments of :mod:`vm.limits`
 (moves, parts of moves, corner arcs); below they are called moves.

@@ -11,7 +11,7 @@ controller produces traces with exactly one effect switched on at a given streng
   at most at the corner feed over its whole length; curvature jumps hold their feed over
   the transition time dt (model 2). The path is cut into segments accordingly.
 * Motion: an independent jerk-limited planner stepped at the controller's cycle with full
-  (or ``lookahead_depth``) look-ahead (:mod:`vm.planner`); ``core.profile`` is not used.
+  (or ``lookahead_depth``) look-ahead (:mod:`vm.planner`); ``core.engine.profile`` is not used.
 * Output: ``t, x, y, z, v, line`` every cycle from the first motion to rest at the end, the
   columns of the LinuxCNC traces of ``../shared/data/linuxcnc/suite``.
 
@@ -49,8 +49,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import Machine, Ncperf, ToolPath, resolve_machine
-from core import geometry as g
-from core.profile import points_along
+from core.model import geometry as g
+from core.engine.profile import points_along
 
 from .effects import EFFECT_DOCS, EFFECTS, resolve_effect
 from .limits import ControllerSetup, Segments, controller_setup
@@ -374,7 +374,7 @@ def main(argv: Sequence[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    from core.errors import NcperfError
+    from core.model.errors import NcperfError
 
     try:
         sys.exit(main())

@@ -2,14 +2,14 @@
 
 The paper predicts the feed at discontinuities and on blocks; between them it assumes the
 programmed feed. A real interpolator ramps between them with its acceleration and jerk, with
-look-ahead: this effect replaces the point model by the feed profile (:mod:`core.profile`).
+look-ahead: this effect replaces the point model by the feed profile (:mod:`core.engine.profile`).
 No parameters: the machine's own limits shape the ramps.
 """
 
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect
+from core.engine.effects import Effect
 
 EFFECT = Effect(
     name="acceleration_ramps",

@@ -8,7 +8,7 @@ the tangential acceleration on G2/G3 (LinuxCNC 2.9's source: by 0.5). Parameter:
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect, Param
+from core.engine.effects import Effect, Param
 
 EFFECT = Effect(
     name="arc_acceleration",

@@ -2,14 +2,14 @@
 
 On a G2/G3 arc of radius R at constant speed v the normal acceleration is v^2 / R and the
 jerk v^3 / R^2 (eq. 2-3 of the paper, for the inserted arc of model 1); the paper's models
-leave programmed arcs at F. Per axis, as in model 1 (:func:`core.effects.arc_caps`). No
+leave programmed arcs at F. Per axis, as in model 1 (:func:`core.engine.effects.arc_caps`). No
 parameters (a normal_acceleration_factor scales the acceleration part).
 """
 
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect, arc_caps
+from core.engine.effects import Effect, arc_caps
 
 
 def _caps(tp, machine):

@@ -10,7 +10,7 @@ axis speeds (rapids) several times the cutting feeds.
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect, Param, scale_machine
+from core.engine.effects import Effect, Param, scale_machine
 
 
 def _apply(setup, p):

@@ -11,7 +11,7 @@ scaled by the override, measured on the shared harness).
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect, Param
+from core.engine.effects import Effect, Param
 
 
 def _apply(setup, p):

@@ -7,7 +7,7 @@ more slowly than the planner's profile. Parameter: ``window`` (s).
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect, Param
+from core.engine.effects import Effect, Param
 
 EFFECT = Effect(
     name="jerk_filter",

@@ -10,7 +10,7 @@ added because LinuxCNC does it.
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect, Param
+from core.engine.effects import Effect, Param
 
 EFFECT = Effect(
     name="last_block_acceleration",

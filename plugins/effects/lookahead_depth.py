@@ -8,7 +8,7 @@ ARC_BLEND_OPTIMIZATION_DEPTH). Parameter: ``blocks`` (1-1000; 1000 is as good as
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect, Param
+from core.engine.effects import Effect, Param
 
 EFFECT = Effect(
     name="lookahead_depth",

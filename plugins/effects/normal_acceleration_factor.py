@@ -2,7 +2,7 @@
 
 On corner blends (model 1's sqrt(A R)) and on programmed arcs the controller keeps part of the
 acceleration in reserve: corners run at sqrt(f A R) and arcs are capped at their centripetal
-limit sqrt(f A R) (:func:`core.effects.arc_caps`). LinuxCNC 2.9 uses (sqrt(3)/2) a on blends
+limit sqrt(f A R) (:func:`core.engine.effects.arc_caps`). LinuxCNC 2.9 uses (sqrt(3)/2) a on blends
 and arcs. Parameter: ``factor`` (0.2-1).
 """
 
@@ -11,7 +11,7 @@ from __future__ import annotations
 import dataclasses
 
 from core import hookimpl
-from core.effects import Effect, Param, arc_caps
+from core.engine.effects import Effect, Param, arc_caps
 
 
 def _caps(tp, machine):

@@ -11,7 +11,7 @@ from __future__ import annotations
 import math
 
 from core import hookimpl
-from core.effects import Effect, Param
+from core.engine.effects import Effect, Param
 
 
 def _apply(setup, p):

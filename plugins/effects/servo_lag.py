@@ -8,7 +8,7 @@ trace of actual positions shows the predicted speed passed through that lag. Par
 from __future__ import annotations
 
 from core import hookimpl
-from core.effects import Effect, Param
+from core.engine.effects import Effect, Param
 
 EFFECT = Effect(
     name="servo_lag",

@@ -13,7 +13,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from core import Indicator, hookimpl
-from core.toolpath import polyline
+from core.model.toolpath import polyline
 
 NAME = "arc_speed"
 
@@ -85,7 +85,7 @@ class SampleTrace:
 def ncperf_read_trace(source, options):
     if not isinstance(source, SampleTrace):
         return None
-    from core.trace import Trace
+    from core.model.trace import Trace
 
     return Trace(t=source.t, pos=None, v=source.v, line=source.line, source="sample trace")
 
@@ -93,7 +93,7 @@ def ncperf_read_trace(source, options):
 @hookimpl
 def ncperf_effects():
     """A third-party effect: a spindle-load slowdown that scales every feed by ``share``."""
-    from core.effects import Effect, Param
+    from core.engine.effects import Effect, Param
 
     return [
         Effect(

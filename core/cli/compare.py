@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.annotations import zone_count
+from core.view.annotations import zone_count
 from core.facade import Analysis
-from core.report import PER_MIN, at_feed_share, fmt_time, rapid_time
+from core.cli.report import PER_MIN, at_feed_share, fmt_time, rapid_time
 
 
 @dataclass(frozen=True)

@@ -23,10 +23,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from core import geometry as g
-from core.profile import points_along
-from core.toolpath import ToolPath
-from core.trace import Trace
+from core.model import geometry as g
+from core.engine.profile import points_along
+from core.model.toolpath import ToolPath
+from core.model.trace import Trace
 
 #: Path sampling step for projection (mm).
 STEP = 0.05

@@ -2,7 +2,7 @@
 
 A :class:`Trace` holds time and any of position, path feed and program line. Readers are
 plugins (``ncperf_read_trace``); the core aligns a trace with a tool path
-(:mod:`core.align`) and compares it with the prediction (:mod:`core.diagnose`).
+(:mod:`core.diagnosis.align`) and compares it with the prediction (:mod:`core.diagnosis.diagnose`).
 """
 
 from __future__ import annotations
@@ -12,7 +12,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from core.errors import Notice
+from core.model.errors import Notice
 
 
 @dataclass(frozen=True)

@@ -1,7 +1,7 @@
 """Sim-to-real gap diagnosis: where the prediction misses a measured trace, which unmodelled
 effect explains it, and how far the gap shrinks once that effect is modelled.
 
-1. Every trace is aligned with the program (:mod:`core.align`); its feed is resampled on the
+1. Every trace is aligned with the program (:mod:`core.diagnosis.align`); its feed is resampled on the
    arc length of the feed moves every ``STEP`` mm.
 2. The gap is the measured minus the predicted feed there (mm/min in reports), its RMS taken
    over time: every grid point weighs the time the machine spends there (step / measured
@@ -9,7 +9,7 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    long as they last, not as long as they are. The gap map
    lists the stretches where it exceeds GAP_SHARE of the programmed feed: program lines, arc
    lengths, what is there, RMS gap, seconds lost or gained.
-3. Every effect (:mod:`core.effects`) has its parameters fitted on calibration data -- the
+3. Every effect (:mod:`core.engine.effects`) has its parameters fitted on calibration data -- the
    even-numbered traces when there are several (other runs or programs), else alternate
    stretches of one run -- and its gap measured on the held-out data it was not fitted on.
    Effects are ranked by how much of the held-out gap they remove (among equally good ones,
@@ -32,13 +32,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from core.align import Alignment
-from core.annotations import Annotations
-from core.effects import Effect, Param, Setup
+from core.diagnosis.align import Alignment
+from core.view.annotations import Annotations
+from core.engine.effects import Effect, Param, Setup
 from core.facade import Ncperf
-from core.machine import Machine
-from core.predict import Prediction, predict
-from core.toolpath import ToolPath
+from core.model.machine import Machine
+from core.engine.predict import Prediction, predict
+from core.model.toolpath import ToolPath
 
 #: Comparison step along the path (mm); coarser for long programs (MAX_POINTS).
 STEP = 0.1

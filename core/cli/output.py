@@ -9,7 +9,7 @@ from collections.abc import Iterator
 from pathlib import Path
 from typing import IO
 
-from core.errors import UsageError
+from core.model.errors import UsageError
 
 
 @contextlib.contextmanager

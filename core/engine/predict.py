@@ -1,6 +1,6 @@
-"""A prediction built from a :class:`~core.effects.Setup`: the paper's models, the effects
+"""A prediction built from a :class:`~core.engine.effects.Setup`: the paper's models, the effects
 switched on, and (with ramps) the feed profile -- as a speed over arc length and over time,
-for comparison with measured traces (see :mod:`core.effects` for the steps)."""
+for comparison with measured traces (see :mod:`core.engine.effects` for the steps)."""
 
 from __future__ import annotations
 
@@ -11,12 +11,12 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core.align import _point_at, _refine, isotonic, sample_path
-from core.effects import Setup
+from core.diagnosis.align import _point_at, _refine, isotonic, sample_path
+from core.engine.effects import Setup
 from core.facade import Ncperf
-from core.indicators import Evaluation, Indicator, combine
-from core.profile import Profile, build_profile
-from core.toolpath import ToolPath
+from core.engine.indicators import Evaluation, Indicator, combine
+from core.engine.profile import Profile, build_profile
+from core.model.toolpath import ToolPath
 
 #: Time step of the predicted signal when time-domain effects are on (s); longer programs
 #: get a coarser step so that the signal stays under MAX_SAMPLES.
@@ -72,7 +72,7 @@ class Prediction:
         The filters act on the positions, axis by axis, as a controller's setpoint filter
         and a position loop do: a centred moving average over ``filter_window``, then a
         first-order lag ``servo_tau``. The result is then read as a measured trace is
-        (:mod:`core.align`): its speed is that of the filtered positions, its place on the
+        (:mod:`core.diagnosis.align`): its speed is that of the filtered positions, its place on the
         path their projection. At a corner or on an arc the filtered positions cut inside
         the path, and their speed dips more than the filtered path speed would.
         """
@@ -193,7 +193,7 @@ def compression_runs(tp: ToolPath, max_angle: float, max_length: float) -> NDArr
 
 
 def predict(nc: Ncperf, tp: ToolPath, setup: Setup) -> Prediction:
-    """The prediction of ``setup`` on ``tp`` (see :mod:`core.effects` for the steps)."""
+    """The prediction of ``setup`` on ``tp`` (see :mod:`core.engine.effects` for the steps)."""
     changes = {}
     if setup.feed_scale != 1.0:
         changes["feed"] = tp.feed * setup.feed_scale

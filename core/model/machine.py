@@ -27,7 +27,7 @@ from pathlib import Path
 import numpy as np
 from numpy.typing import NDArray
 
-from core.errors import MachineError, UsageError
+from core.model.errors import MachineError, UsageError
 
 AXES = ("X", "Y", "Z")
 
@@ -287,7 +287,7 @@ DEFAULT_PRESET = "siemens-840d"
 
 def preset_names() -> list[str]:
     """Names of the shipped presets (what ``--machine`` takes)."""
-    files = resources.files("core") / "presets"
+    files = resources.files("core.model") / "presets"
     return sorted(f.name[: -len(".toml")] for f in files.iterdir() if f.name.endswith(".toml"))
 
 
@@ -296,7 +296,7 @@ def load_preset(name: str) -> Machine:
     names = preset_names()
     if name not in names:
         raise UsageError(f"unknown machine preset '{name}'; presets: {', '.join(names)}")
-    res = resources.files("core") / "presets" / f"{name}.toml"
+    res = resources.files("core.model") / "presets" / f"{name}.toml"
     return machine_from_toml_text(res.read_text(encoding="utf-8"), f"preset {name}")
 
 

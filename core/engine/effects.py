@@ -6,7 +6,7 @@ is built from -- and returns a changed one. Effects are plugins (``ncperf_effect
 machine file switches them on with ``[effects.NAME]`` tables, and ``ncperf diagnose`` fits
 their parameters to a measured trace.
 
-The prediction built from a Setup (:func:`core.predict.predict`):
+The prediction built from a Setup (:func:`core.engine.predict.predict`):
 
 1. the tool path, with the programmed feeds scaled by ``feed_scale`` (the indicators' feeds
    by ``cap_scale``) and, where
@@ -14,7 +14,7 @@ The prediction built from a Setup (:func:`core.predict.predict`):
 2. the A2 evaluation on ``machine`` (whose limits, block time, TIT and normal-acceleration
    share effects may have changed), plus ``element_caps`` (extra block limits), minus the
    limits inside runs a path compressor merges (``compression``);
-3. with ``ramps``, the feed profile (:mod:`core.profile`) with a look-ahead of
+3. with ``ramps``, the feed profile (:mod:`core.engine.profile`) with a look-ahead of
    ``lookahead`` blocks, else the paper's point model (each block at its own feed);
 4. time-domain filters on the predicted motion, for traces of actual positions
    (``servo_tau``: first-order lag; ``filter_window``: moving average).
@@ -29,10 +29,10 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from core import geometry as g
-from core.errors import MachineError, UsageError
-from core.machine import Machine
-from core.toolpath import MoveKind, ToolPath
+from core.model import geometry as g
+from core.model.errors import MachineError, UsageError
+from core.model.machine import Machine
+from core.model.toolpath import MoveKind, ToolPath
 
 
 @dataclass(frozen=True)

@@ -1,6 +1,6 @@
 """Colour annotations (what A3 displays draw) and critical zones.
 
-Built from an :class:`~core.indicators.Evaluation`: the paper's two views
+Built from an :class:`~core.engine.indicators.Evaluation`: the paper's two views
 (sec. 3.3) -- blocks classed by predicted feed reduction with the
 discontinuity points marked by class (Figure 11), and blocks classed by
 length against L = F t_int (Figure 10) -- plus the worst zones, findable by
@@ -15,8 +15,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from core.indicators import REDUCTION_LABELS, Evaluation, reduction_class
-from core.profile import Profile, build_profile
+from core.engine.indicators import REDUCTION_LABELS, Evaluation, reduction_class
+from core.engine.profile import Profile, build_profile
 
 #: Colours of the reduction classes, green (0-10 %) to red (> 90 %), as in Figure 11.
 REDUCTION_COLOURS = ("#1a9850", "#91cf60", "#d9ef8b", "#fdae61", "#f46d43", "#d73027")
@@ -89,7 +89,7 @@ class DiagnosisTarget:
     Attributes
     ----------
     path : str
-    diagnosis : core.diagnose.Diagnosis
+    diagnosis : core.diagnosis.diagnose.Diagnosis
     view : {"xy", "xz", "yz", "iso"}
     """
 

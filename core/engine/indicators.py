@@ -17,8 +17,8 @@ from typing import Literal
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core.machine import Machine
-from core.toolpath import ToolPath
+from core.model.machine import Machine
+from core.model.toolpath import ToolPath
 
 #: Limit label when no indicator is below the programmed feed.
 PROGRAMMED = "programmed feed"

@@ -14,7 +14,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core.tolerances import TOL
+from core.model.tolerances import TOL
 
 TWO_PI = 2.0 * np.pi
 

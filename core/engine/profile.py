@@ -52,9 +52,9 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core import geometry as g
-from core.indicators import Evaluation
-from core.toolpath import MoveKind, PathMode, ToolPath
+from core.model import geometry as g
+from core.engine.indicators import Evaluation
+from core.model.toolpath import MoveKind, PathMode, ToolPath
 
 #: Most rounds of the jerk (effective acceleration) iteration, and when to stop early: the
 #: effective accelerations fall monotonically (a lower A_eff gives lower peaks, hence smaller

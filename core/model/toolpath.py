@@ -14,9 +14,9 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core import geometry as g
-from core.errors import Notice
-from core.tolerances import TOL
+from core.model import geometry as g
+from core.model.errors import Notice
+from core.model.tolerances import TOL
 
 
 class MoveKind(IntEnum):
@@ -294,7 +294,7 @@ class ToolPath:
         """(n, 3) largest share |t_k| of each axis in the unit tangent over each move.
 
         Lines have one direction. On arcs the in-plane part of the tangent turns with the
-        sweep (its largest share per axis: :func:`core.geometry.max_share`); a helix adds
+        sweep (its largest share per axis: :func:`core.model.geometry.max_share`); a helix adds
         its constant rise along the normal, bounded by adding its share (|a + b| <= |a| + |b|).
         An axis moving at path speed V runs at V times its share: what per-axis feed,
         acceleration and jerk limits are divided by.

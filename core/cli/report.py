@@ -13,9 +13,9 @@ from typing import IO
 import numpy as np
 
 from core.facade import Analysis
-from core.indicators import REDUCTION_LABELS, reduction_class
-from core.profile import Profile, Samples
-from core.toolpath import KIND_LABELS
+from core.engine.indicators import REDUCTION_LABELS, reduction_class
+from core.engine.profile import Profile, Samples
+from core.model.toolpath import KIND_LABELS
 
 PER_MIN = 60.0
 
