@@ -20,8 +20,8 @@ import sys
 from pathlib import Path
 
 from core import Ncperf
+from core.cli.diagnosis_report import toml_snippet
 from core.diagnosis.align import align
-from core.diagnosis.diagnose import diagnose, diagnose_cases, toml_snippet
 from core.engine.effects import setup_for
 from core.model.machine import resolve_machine
 
@@ -62,7 +62,7 @@ def main() -> int:
     )
     for baseline in ("paper", "profile"):
         base = setup_for(machine, effects, ramps=baseline == "profile")
-        d = diagnose_cases(nc, cases, base, baseline, effects)
+        d = nc.diagnose(cases, base, baseline, effects)
         print()
         print(f"baseline {baseline}: {d.held_out}")
         print(
@@ -89,7 +89,7 @@ def main() -> int:
         print("|---|---|---|---|")
         base = setup_for(machine, effects, ramps=True)
         for tp, als, labels in cases:
-            d = diagnose(nc, tp, als, labels, base, "profile", effects)
+            d = nc.diagnose([(tp, als, labels)], base, "profile", effects)
             top = d.effects[0]
             print(
                 f"| {labels[0]} | {d.gap_rms_before:.1f} | {d.best_effect} | "

@@ -29,7 +29,6 @@ import numpy as np
 
 from core import Ncperf, load_preset
 from core.engine.effects import setup_for
-from core.engine.predict import predict
 from core.engine.profile import build_profile
 from core.model.toolpath import MoveKind
 
@@ -92,7 +91,7 @@ def validate(nc: Ncperf, prog: Path) -> dict[str, float]:
     preset = load_preset("linuxcnc-sim")
     ev = nc.evaluate(tp, dataclasses.replace(preset, effects=()))
     pr = build_profile(ev)
-    folded = predict(nc, tp, setup_for(preset, nc.effects(), ramps=True))
+    folded = nc.predict(tp, setup_for(preset, nc.effects(), ramps=True))
     tr = read_trace(prog.with_suffix(".csv"))
     t, v = tr["t"], tr["v"]
     pts = np.column_stack([tr["x"], tr["y"], tr["z"]])

@@ -35,7 +35,6 @@ import numpy as np
 
 from core import Ncperf
 from core.diagnosis.align import align
-from core.diagnosis.diagnose import diagnose_cases
 from core.engine.effects import setup_for
 from core.model.machine import resolve_machine
 
@@ -268,9 +267,9 @@ def main() -> int:
             else:
                 run(src[p], out, sets, override, tol)
             cases.append((tps[p], [align(tps[p], nc.read_trace(str(out)))], [p]))
-        d = diagnose_cases(nc, cases[: len(PROGRAMS)], base, "profile", effects)
+        d = nc.diagnose(cases[: len(PROGRAMS)], base, "profile", effects)
         # Each program on its own, as a user diagnoses one trace.
-        singles.append([diagnose_cases(nc, [c], base, "profile", effects) for c in cases])
+        singles.append([nc.diagnose([c], base, "profile", effects) for c in cases])
         wall = time.perf_counter() - t0
         named = d.best_effect or "none"
         if effect is None:

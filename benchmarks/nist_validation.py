@@ -23,8 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from core import Ncperf
-from core.model.machine import load_machine_file
 from core.engine.profile import build_profile
+from core.model.machine import load_machine_file
 
 ROOT = Path(__file__).resolve().parents[1]
 DATA = ROOT.parent / "shared" / "data" / "nist-mtc-box-op2"

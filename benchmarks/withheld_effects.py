@@ -37,7 +37,6 @@ import numpy as np
 
 from core import Ncperf
 from core.diagnosis.align import align
-from core.diagnosis.diagnose import diagnose_cases
 from core.engine.effects import setup_for
 from core.model.machine import Machine, resolve_machine
 from core.model.trace import Trace
@@ -118,7 +117,7 @@ def run_case(nc, effects, machine, tps, effect, params):
         sim = simulate(tp, machine, effect, params, ncperf=nc)
         cases.append((tp, [align(tp, trace_of(sim, f"vm:{name}"))], [name]))
     base = setup_for(machine, effects, ramps=True)
-    return diagnose_cases(nc, cases, base, "profile", effects)
+    return nc.diagnose(cases, base, "profile", effects)
 
 
 def main() -> int:

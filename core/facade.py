@@ -6,30 +6,23 @@ It runs the paper's three tasks in order: A1 extract -> A2 evaluate -> A3 displa
 from __future__ import annotations
 
 import argparse
-from dataclasses import dataclass
+from collections.abc import Mapping, Sequence
 
 import pluggy
 
-from core.view.annotations import Annotations, build_annotations
-from core.engine.effects import Effect
-from core.model.errors import UsageError
+from core.diagnosis.align import Alignment
+from core.diagnosis.diagnose import Diagnosis, diagnose_cases
+from core.engine.effects import Effect, Setup, setup_for
 from core.engine.indicators import Evaluation, Indicator, combine
+from core.engine.predict import Prediction, predict
+from core.engine.profile import build_profile
+from core.model.errors import UsageError
 from core.model.machine import Machine
-from core.plugins import make_plugin_manager
-from core.engine.profile import Profile, build_profile
 from core.model.toolpath import ExtractOptions, ToolPath
 from core.model.trace import Trace, TraceOptions
-
-
-@dataclass(frozen=True, eq=False)
-class Analysis:
-    """The result of A1 + A2: the tool path, the combined evaluation, its feed profile and
-    its annotations."""
-
-    toolpath: ToolPath
-    evaluation: Evaluation
-    profile: Profile
-    annotations: Annotations
+from core.plugins import make_plugin_manager
+from core.view.analysis import Analysis
+from core.view.annotations import Annotations, build_annotations
 
 
 class Ncperf:
@@ -84,11 +77,9 @@ class Ncperf:
         tp = self.extract(source, options)
         if machine.effects:
             # Effects the machine file switches on are part of its model (issue 5).
-            from core.engine.effects import setup_for
-            from core.engine.predict import predict
-
-            pred = predict(self, tp, setup_for(machine, self.effects()))
+            pred = self.predict(tp, setup_for(machine, self.effects()))
             ev, profile = pred.evaluation, pred.profile
+            assert profile is not None  # setup_for builds a profile (ramps) by default
         else:
             ev = self.evaluate(tp, machine)
             profile = build_profile(ev)
@@ -104,6 +95,11 @@ class Ncperf:
         """The paper's Figure 5: extract, evaluate, display."""
         analysis = self.analyze(source, machine, options)
         return analysis, self.display(analysis.toolpath, analysis.annotations, target)
+
+    def predict(self, toolpath: ToolPath, setup: Setup) -> Prediction:
+        """The prediction of a :class:`~core.engine.effects.Setup` (a machine and the effects
+        switched on) on a tool path, with this manager's plugins."""
+        return predict(self.indicators, toolpath, setup)
 
     # traces
     def read_trace(self, source: object, options: TraceOptions | None = None) -> Trace:
@@ -130,6 +126,18 @@ class Ncperf:
                     raise ValueError(f"two plugins define the effect {eff.name!r}")
                 out[eff.name] = eff
         return out
+
+    def diagnose(
+        self,
+        cases: Sequence[tuple[ToolPath, Sequence[Alignment], Sequence[str]]],
+        base: Setup,
+        baseline: str,
+        effects: Mapping[str, Effect],
+    ) -> Diagnosis:
+        """The diagnosis of programs against their aligned traces (each case: a tool path,
+        its alignments and their labels), on one machine (``base``), with these effects
+        (see :mod:`core.diagnosis.diagnose`)."""
+        return diagnose_cases(self.indicators, cases, base, baseline, effects)
 
     # command line
     def add_commands(self, subparsers: argparse._SubParsersAction) -> None:

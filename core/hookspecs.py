@@ -17,12 +17,12 @@ from typing import TYPE_CHECKING
 import pluggy
 
 if TYPE_CHECKING:
-    from core.view.annotations import Annotations
     from core.engine.effects import Effect
     from core.engine.indicators import Indicator
     from core.model.machine import Machine
     from core.model.toolpath import ExtractOptions, ToolPath
     from core.model.trace import Trace, TraceOptions
+    from core.view.annotations import Annotations
 
 PROJECT = "ncperf"
 

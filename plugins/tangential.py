@@ -82,7 +82,7 @@ def _in_plane_normal(t1: NDArray[np.float64], t2: NDArray[np.float64]) -> NDArra
     """Unit u perpendicular to t1 in the plane (t1, t2), pointing towards t2."""
     u = t2 - g.dot(t1, t2)[:, None] * t1
     n = g.norm(u)
-    bad = n < 1e-12  # a reversal (beta = pi): any perpendicular does, R is 0 anyway
+    bad = n < TOL.reversal  # a reversal (beta = pi): any perpendicular does, R is 0 anyway
     if bad.any():
         tb = t1[bad]
         helper = np.eye(3)[np.argmin(np.abs(tb), axis=1)]

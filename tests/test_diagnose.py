@@ -12,9 +12,7 @@ import pytest
 
 from core import InputError
 from core.diagnosis.align import align, isotonic
-from core.diagnosis.diagnose import diagnose
 from core.engine.effects import Setup
-from core.engine.predict import predict
 from core.model.trace import Trace
 from tests.conftest import machine, path
 
@@ -39,7 +37,7 @@ def synthetic_trace(nc, tp, setup, dt=0.001, with_positions=True):
     lag is applied here, to the positions axis by axis (x += (target - x) (1 - e^(-dt/tau))
     every step), and the speed is then that of the lagged positions."""
     tau = setup.servo_tau
-    pred = predict(nc, tp, dataclasses.replace(setup, servo_tau=0.0))
+    pred = nc.predict(tp, dataclasses.replace(setup, servo_tau=0.0))
     t, s, v = pred.signal()
     from core.diagnosis.align import _point_at
 
@@ -75,7 +73,7 @@ def test_alignment_recovers_arc_length_and_an_offset(nc):
     shifted = dataclasses.replace(tr, pos=tr.pos + np.array([5.0, -3.0, 2.0]), line=None)
     al = align(tp, shifted)
     assert al.ok and np.allclose(al.offset, [5, -3, 2], atol=0.01)
-    pred = predict(nc, tp, Setup(machine=m))
+    pred = nc.predict(tp, Setup(machine=m))
     _, s_true, _ = pred.signal()
     assert np.max(np.abs(al.s - s_true)) < 0.06  # within the path sampling step
 
@@ -90,7 +88,7 @@ def test_alignment_keeps_a_plunge_apart_from_the_retract_it_retraces(nc, with_li
     if not with_lines:
         tr = dataclasses.replace(tr, line=None)
     al = align(tp, tr)
-    _, s_true, _ = predict(nc, tp, Setup(machine=m)).signal()
+    _, s_true, _ = nc.predict(tp, Setup(machine=m)).signal()
     assert al.ok
     assert np.max(np.abs(al.s - s_true)) < 0.06  # within the path sampling step
     plunge = (s_true > 10.5) & (s_true < 19.5)
@@ -142,7 +140,7 @@ def test_a_known_effect_is_named_first(nc, name, params):
     base = Setup(machine=m)
     truth = effects[name].apply(base, effects[name].defaults(m) | params)
     tr = synthetic_trace(nc, tp, truth)
-    d = diagnose(nc, tp, [align(tp, tr)], ["t"], base, "profile", effects)
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", effects)
     assert d.best_effect == name
     for k, v in params.items():
         assert d.effects[0].params[k] == pytest.approx(v, rel=0.1)
@@ -171,7 +169,7 @@ def test_an_axis_speed_limit_under_the_feed_is_not_a_feed_override(nc):
     base = Setup(machine=m)
     slow_axes = machine(feed=(4.5, 4.5, 4.5), jerk=(INF, INF, INF))  # 75 mm/s
     tr = synthetic_trace(nc, tp, Setup(machine=slow_axes))
-    d = diagnose(nc, tp, [align(tp, tr)], ["t"], base, "profile", effects)
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", effects)
     assert d.best_effect == "axis_dynamics"
     assert d.effects[0].params["feed_scale"] == pytest.approx(0.15, rel=0.03)
     assert d.effects[0].held_out_gap_after < 0.1 * d.effects[0].held_out_gap_before
@@ -182,7 +180,7 @@ def test_unchanged_machine_has_no_best_effect(nc):
     tp = zigzag()
     base = Setup(machine=machine(jerk=(INF, INF, INF)))
     tr = synthetic_trace(nc, tp, base)
-    d = diagnose(nc, tp, [align(tp, tr)], ["t"], base, "profile", nc.effects())
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", nc.effects())
     assert d.best_effect is None and d.chosen == ()
 
 
@@ -190,7 +188,7 @@ def test_a_gap_in_the_recording_is_left_out_not_filled_in(nc):
     """Samples missing over 0.5 s (the recorder stalled) in a trace of the model itself: the
     stretch they would have covered is not compared (no feed is invented across it), and
     nothing is named."""
-    from core.diagnosis.diagnose import resample
+    from core.diagnosis.resample import resample
 
     tp = zigzag()
     base = Setup(machine=machine(jerk=(INF, INF, INF)))
@@ -202,7 +200,7 @@ def test_a_gap_in_the_recording_is_left_out_not_filled_in(nc):
     assert s_hi - s_lo > 10.0  # the hole spans more than 10 mm of path
     data = resample(tp, al, "t")
     assert not np.any((data.s > s_lo + 0.1) & (data.s < s_hi - 0.1))
-    d = diagnose(nc, tp, [al], ["t"], base, "profile", nc.effects())
+    d = nc.diagnose([(tp, [al], ["t"])], base, "profile", nc.effects())
     assert d.best_effect is None
 
 
@@ -211,8 +209,8 @@ def test_paper_baseline_names_acceleration_ramps(nc):
     tp = zigzag()
     m = machine(jerk=(INF, INF, INF))
     tr = synthetic_trace(nc, tp, Setup(machine=m))
-    d = diagnose(
-        nc, tp, [align(tp, tr)], ["t"], Setup(machine=m, ramps=False), "paper", nc.effects()
+    d = nc.diagnose(
+        [(tp, [align(tp, tr)], ["t"])], Setup(machine=m, ramps=False), "paper", nc.effects()
     )
     assert d.best_effect == "acceleration_ramps"
 
@@ -224,7 +222,7 @@ def test_two_runs_hold_one_out(nc):
     eff = nc.effects()
     truth = eff["feed_override"].apply(Setup(machine=m), {"scale": 0.9})
     als = [align(tp, synthetic_trace(nc, tp, truth)) for _ in range(2)]
-    d = diagnose(nc, tp, als, ["a", "b"], Setup(machine=m), "profile", eff)
+    d = nc.diagnose([(tp, als, ["a", "b"])], Setup(machine=m), "profile", eff)
     assert d.held_out.startswith("other runs: fitted on a, measured on b")
     assert d.best_effect == "feed_override"
 
@@ -234,7 +232,7 @@ def test_a_machine_with_folded_effects_starts_from_them(nc):
     actually runs at 0.72 of F (0.9 x 0.8) with the same arcs. The fit finds the further
     scale 0.8 and suggests 0.72 for the file. On a trace of the folded machine itself,
     nothing stands out and arc_acceleration stays at its folded 0.5 (not reset to 1)."""
-    from core.diagnosis.diagnose import toml_snippet
+    from core.cli.diagnosis_report import toml_snippet
     from core.engine.effects import setup_for
 
     tp = zigzag()
@@ -244,13 +242,15 @@ def test_a_machine_with_folded_effects_starts_from_them(nc):
     base = setup_for(m, eff)
     assert base.feed_scale == pytest.approx(0.9) and base.arc_factor == 0.5
     truth = eff["feed_override"].apply(base, {"scale": 0.8})
-    d = diagnose(nc, tp, [align(tp, synthetic_trace(nc, tp, truth))], ["t"], base, "profile", eff)
+    d = nc.diagnose(
+        [(tp, [align(tp, synthetic_trace(nc, tp, truth))], ["t"])], base, "profile", eff
+    )
     assert d.best_effect == "feed_override"
     assert d.chosen_params["feed_override"]["scale"] == pytest.approx(0.8, rel=0.01)
     assert "scale = 0.72" in toml_snippet(d, m, eff)
     assert eff["arc_acceleration"].start(m) == {"factor": 0.5}
     assert eff["feed_override"].start(m) == {"scale": 1.0, "caps": 0.0}
-    d = diagnose(nc, tp, [align(tp, synthetic_trace(nc, tp, base))], ["t"], base, "profile", eff)
+    d = nc.diagnose([(tp, [align(tp, synthetic_trace(nc, tp, base))], ["t"])], base, "profile", eff)
     assert d.best_effect is None
     arc = next(r for r in d.effects if r.name == "arc_acceleration")
     assert arc.params["factor"] == pytest.approx(0.5, abs=0.01)

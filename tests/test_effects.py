@@ -11,7 +11,6 @@ import pytest
 from core import MachineError, UsageError
 from core.engine.effects import Setup, setup_for
 from core.model.machine import machine_from_toml_text
-from core.engine.predict import predict
 from tests.conftest import machine, path
 
 INF = float("inf")
@@ -42,7 +41,7 @@ def run(nc, effects, tp, m, name=None, ramps=True, **params):
     if name:
         eff = effects[name]
         setup = eff.apply(setup, eff.defaults(m) | eff.check(params))
-    return predict(nc, tp, setup)
+    return nc.predict(tp, setup)
 
 
 def test_the_built_in_effects(nc):
@@ -99,7 +98,7 @@ def test_arc_feed_limit(nc, effects):
     assert p.evaluation.indicator_names[p.evaluation.element_indicator[0]] == "arc_feed_limit"
     both = effects["normal_acceleration_factor"].apply(Setup(machine=m), {"factor": 0.5})
     both = effects["arc_feed_limit"].apply(both, {})
-    assert predict(nc, tp, both).evaluation.element_feed[0] == pytest.approx(math.sqrt(6250))
+    assert nc.predict(tp, both).evaluation.element_feed[0] == pytest.approx(math.sqrt(6250))
 
 
 def test_axis_dynamics(nc, effects):
@@ -207,7 +206,7 @@ def test_machine_file_switches_effects_on(nc, effects):
     setup = setup_for(m, effects)
     assert setup.feed_scale == 0.5
     tp = path([{"end": (100, 0, 0)}])
-    assert predict(nc, tp, setup).evaluation.element_feed[0] == pytest.approx(50.0)
+    assert nc.predict(tp, setup).evaluation.element_feed[0] == pytest.approx(50.0)
 
 
 @pytest.mark.parametrize(

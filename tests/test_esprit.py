@@ -26,10 +26,10 @@ from adapters.esprit_com.draw import EspritError
 from adapters.esprit_com.emulation import Backend, backend, fill_document, raw_document, recording
 from adapters.gcode import read_gcode
 from core import FileTarget, InputError, resolve_machine
-from core.view.annotations import REDUCTION_COLOURS, Annotations
 from core.cli import main
 from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, ToolPath, empty_columns
+from core.view.annotations import REDUCTION_COLOURS, Annotations
 from tests.conftest import ROOT
 
 BACKENDS = ("python-twin", "dotnet", "dotnet-latebound")

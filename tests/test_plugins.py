@@ -15,9 +15,9 @@ import pytest
 
 import core
 from core import Ncperf, UsageError, hookspecs, make_plugin_manager
-from core.view.annotations import build_annotations
-from core.engine.profile import build_profile
 from core.cli.report import write_json
+from core.engine.profile import build_profile
+from core.view.annotations import build_annotations
 from tests.conftest import ROOT, machine, path
 from tests.plugins import sample
 

@@ -24,8 +24,8 @@ from core import (
     make_plugin_manager,
 )
 from core.model import geometry as g
-from core.view.annotations import VIEWS
 from core.model.toolpath import MoveKind, empty_columns, polyline
+from core.view.targets import VIEWS
 
 PLUGINS = (
     "plugins.tangential",

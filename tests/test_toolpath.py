@@ -8,9 +8,10 @@ import numpy as np
 import pytest
 
 from core import ToolPath
-from core.view.annotations import build_annotations, find_zones
 from core.engine.profile import build_profile
 from core.model.toolpath import MoveKind, drop_zero_length, empty_columns, polyline
+from core.view.annotations import build_annotations
+from core.view.zones import find_zones
 from tests.conftest import machine, path
 
 

@@ -58,9 +58,6 @@ from core.model.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, 
 
 INCH = 25.4
 PLUS_Z = (0.0, 0.0, 1.0)
-#: A tool axis i,j,k further than this from unit length is a misreading, not rounding:
-#: CAM systems write it with 6-7 decimals.
-AXIS_UNIT_TOLERANCE = 1e-3
 #: cos of the angle within which an arc counts as tangent to (or reversed against) a line:
 #: 2e-3 rad, the tangency tolerance of the curvature model (TOL.tangent_angle).
 _TANGENT_COS = np.cos(TOL.tangent_angle)
@@ -392,7 +389,7 @@ class Reader:
         centre = (vals[0] * sc, vals[1] * sc, vals[2] * sc)
         i, j, k = vals[3:6]
         length = math.sqrt(i * i + j * j + k * k)
-        if length < 1e-9:
+        if length < TOL.direction:
             raise self._error(rec, f"{rec.word} axis vector i,j,k is zero")
         radius = math.nan
         if len(vals) > 6:
@@ -641,7 +638,7 @@ class Reader:
         if not given.any() and self.start_axis is None:
             return None
         length = g.norm(np.where(given[:, None], ijk, 1.0))
-        bad = given & (np.abs(length - 1.0) > AXIS_UNIT_TOLERANCE)
+        bad = given & (np.abs(length - 1.0) > TOL.unit_vector)
         if bad.any():
             k = int(np.argmax(bad))
             raise self.src.error(
@@ -655,8 +652,9 @@ class Reader:
         idx = np.where(given, np.arange(given.size), -1)
         np.maximum.accumulate(idx, out=idx)
         axis = np.where((idx >= 0)[:, None], g.unit(ijk[np.maximum(idx, 0)]), initial)
-        if np.any(np.abs(axis - axis[0]).max(axis=1) > 1e-9):
-            k = int(np.argmax(np.abs(axis - axis[0]).max(axis=1) > 1e-9))
+        changed = np.abs(axis - axis[0]).max(axis=1) > TOL.direction
+        if np.any(changed):
+            k = int(np.argmax(changed))
             self.notes.add(
                 "the tool axis changes (5-axis or indexed CL data): it is kept in the tool path, "
                 "and the feed models evaluate the x,y,z path of the tool tip",

@@ -12,9 +12,9 @@ import os
 from adapters.esprit_com.clr_host import as_host
 from adapters.esprit_com.command import analyze_and_draw
 from adapters.esprit_com.extract import EspritSource
+from core.cli.report import summary
 from core.facade import Ncperf
 from core.model.machine import resolve_machine
-from core.cli.report import summary
 
 #: Machine preset name or TOML file for the add-in (it has no command line).
 MACHINE_ENV = "NCPERF_MACHINE"

@@ -15,10 +15,10 @@ from adapters.esprit_com.clr_host import DotnetUnavailable, attach_running_espri
 from adapters.esprit_com.draw import Drawing
 from adapters.esprit_com.extract import EspritSource
 from adapters.esprit_com.object_model import LAYER_NAME
-from core.model.errors import UsageError
-from core.facade import Analysis, Ncperf
-from core.model.machine import DEFAULT_PRESET, Machine, resolve_machine
 from core.cli.report import summary
+from core.facade import Analysis, Ncperf
+from core.model.errors import UsageError
+from core.model.machine import DEFAULT_PRESET, Machine, resolve_machine
 from core.model.toolpath import ExtractOptions
 
 MAX_NOTICES = 10

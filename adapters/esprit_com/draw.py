@@ -28,10 +28,10 @@ from adapters.esprit_com import object_model as om
 from adapters.esprit_com.clr_host import exception_text
 from adapters.esprit_com.extract import document_label
 from core.model import geometry as g
-from core.view.annotations import Annotations
 from core.model.errors import NcperfError
 from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, ToolPath
+from core.view.annotations import Annotations
 
 #: Chords per radian for helices: pi/8 keeps the chord within 2 % of the radius of the helix.
 HELIX_CHORDS_PER_RAD = 8.0 / np.pi
@@ -124,7 +124,7 @@ def _split_turns(first: list[int], last: list[int], sweep: NDArray) -> tuple[lis
     for a, b in zip(first, last, strict=True):
         start, total = a, 0.0
         for m in range(a, b + 1):
-            if total + sweep[m] > om.FULL_TURN * (1.0 + 1e-12) and m > start:
+            if total + sweep[m] > om.FULL_TURN * (1.0 + TOL.float_slack) and m > start:
                 out_first.append(start)
                 out_last.append(m - 1)
                 start, total = m, 0.0
@@ -191,7 +191,7 @@ def plan_drawing(tp: ToolPath, ann: Annotations) -> DrawPlan:
     # Arc runs, at most a full turn each.
     cum = np.cumsum(sweep)
     af, al = first[is_arc], last[is_arc]
-    if np.any(cum[al] - cum[af] + sweep[af] > om.FULL_TURN * (1.0 + 1e-12)):
+    if np.any(cum[al] - cum[af] + sweep[af] > om.FULL_TURN * (1.0 + TOL.float_slack)):
         a_first, a_last = _split_turns(af.tolist(), al.tolist(), sweep)
         af = np.asarray(a_first, dtype=np.int64)
         al = np.asarray(a_last, dtype=np.int64)

@@ -18,9 +18,9 @@ from numpy.typing import NDArray
 
 from adapters.esprit_com import object_model as om
 from adapters.esprit_com.clr_host import LateBound, load_emulation
+from core.cli.output import atomic_writer
 from core.model import geometry as g
 from core.model.errors import InputError
-from core.cli.output import atomic_writer
 from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, ToolPath
 

@@ -1,4 +1,4 @@
-"""A1: the tool paths of an ESPRIT document's operations as one :class:`~core.model.toolpath.ToolPath`.
+"""A1: the tool paths of an ESPRIT document's operations as one ToolPath (:mod:`core.model`).
 
 The paper's extractor (Tapie et al., sec. 3.1) "explores the tool path object selected in the
 workspace of ESPRIT" and reads its segments, arcs and feeds. Here every ``PartOperation``
@@ -319,7 +319,7 @@ def _cross_check(
     want_feed, want_rapid = float(want_feed), float(want_rapid)
     # Item coordinates are ESPRIT's own doubles: beyond rounding, a difference means some
     # items were classed wrongly; LinuxCNC's end-point tolerance is a generous "rounding".
-    slack = TOL.arc_end_abs + 1e-9 * (got_feed + got_rapid)
+    slack = TOL.arc_end_abs + TOL.rel_equal * (got_feed + got_rapid)
     if abs(got_feed - want_feed) > slack or abs(got_rapid - want_rapid) > slack:
         notes.append(
             Notice(

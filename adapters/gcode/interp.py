@@ -184,7 +184,7 @@ class Interpreter:
             if entry.message:
                 self.notes.add(entry.message, first)
             group[sel] = entry.group
-        exact = np.abs(v * 10 - code) < 1e-6
+        exact = np.abs(v * 10 - code) < TOL.code_number
         if not exact.all():
             k = np.argmin(exact)
             raise self.error(w.line[gi[k]], f"unknown G-code G{v[k]:g}")

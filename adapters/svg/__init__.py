@@ -1,7 +1,7 @@
 """A3: the SVG fallback display, the paper's Figures 10 and 11 in one file.
 
 Recognises ``.svg`` targets: a path (``str`` or ``os.PathLike``, drawn in the
-top view) or a :class:`~core.view.annotations.FileTarget` (its own view). The
+top view) or a :class:`~core.view.targets.FileTarget` (its own view). The
 drawing itself is in :mod:`adapters.svg.render`.
 """
 

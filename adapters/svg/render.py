@@ -37,10 +37,14 @@ from xml.sax.saxutils import escape
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core.model import geometry as g
-from core.view.annotations import VIEWS, Annotations, Zone
 from core.cli.output import atomic_writer
+from core.diagnosis.rules import BEST_SHARE
+from core.model import geometry as g
+from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, ToolPath
+from core.view.annotations import Annotations
+from core.view.targets import VIEWS
+from core.view.zones import Zone
 
 # ---------------------------------------------------------------- layout, px
 #: Width of each panel's plot area; the height follows the drawing's aspect.
@@ -700,7 +704,7 @@ def nice_length(most: float) -> float:
         return 1.0
     p = 10.0 ** np.floor(np.log10(most))
     for f in (5.0, 2.0, 1.0):
-        if f * p <= most * (1 + 1e-9):
+        if f * p <= most * (1 + TOL.rel_equal):
             return float(f * p)
     return float(p)
 
@@ -1060,7 +1064,7 @@ def _feed_plot(
     s_all = np.concatenate([s for s, *_ in series])
     v_all = np.concatenate([v for _, v, *_ in series])
     s_lo, s_hi = float(s_all.min()), float(s_all.max())
-    v_hi = float(max(v_all.max(), 1e-9)) * 1.08
+    v_hi = float(max(v_all.max(), TOL.nil_speed)) * 1.08
     if s_hi <= s_lo:
         s_hi = s_lo + 1.0
     out = [
@@ -1203,7 +1207,8 @@ def render_diagnosis(tp: ToolPath, ann: Annotations, diagnosis: object, view: st
         f"best effect: {d.best_effect}; chosen: {' + '.join(d.chosen)}; gap "
         f"{d.gap_rms_before:.0f} -> {d.gap_rms_after:.0f} mm/min (RMS over time)"
         if d.best_effect
-        else f"no effect removes 20 % of the held-out gap ({d.gap_rms_before:.0f} mm/min): "
+        else f"no effect removes {BEST_SHARE * 100:.0f} % of the held-out gap "
+        f"({d.gap_rms_before:.0f} mm/min): "
         "the model already explains this trace"
     )
     out.append(f'<text x="{MARGIN:.0f}" y="{yy:.0f}" font-weight="bold">{escape(verdict)}</text>\n')

@@ -16,10 +16,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import Indicator, Machine, Ncperf, PathMode, ToolPath, combine
-from core.model import geometry as g
 from core.engine.effects import arc_caps
 from core.engine.indicators import Evaluation
 from core.engine.profile import boundary_caps
+from core.model import geometry as g
 from plugins import tangential
 
 from .planner import Limits

@@ -49,8 +49,8 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import Machine, Ncperf, ToolPath, resolve_machine
-from core.model import geometry as g
 from core.engine.profile import points_along
+from core.model import geometry as g
 
 from .effects import EFFECT_DOCS, EFFECTS, resolve_effect
 from .limits import ControllerSetup, Segments, controller_setup

@@ -7,9 +7,9 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from core.view.annotations import zone_count
-from core.facade import Analysis
-from core.cli.report import PER_MIN, at_feed_share, fmt_time, rapid_time
+from core.cli.report import PER_MIN, fmt_time
+from core.view.analysis import Analysis, at_feed_share, rapid_time
+from core.view.zones import zone_count
 
 
 @dataclass(frozen=True)

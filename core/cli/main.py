@@ -13,16 +13,16 @@ from importlib import resources
 from pathlib import Path
 
 from core import __version__
-from core.view.annotations import VIEWS, ComparisonTarget, FileTarget
 from core.cli.compare import ranked
 from core.cli.compare import row as compare_row
 from core.cli.compare import table as compare_table
-from core.model.errors import InputError, NcperfError, UsageError
-from core.facade import Ncperf
-from core.model.machine import DEFAULT_PRESET, load_preset, preset_names, resolve_machine
 from core.cli.output import atomic_writer
 from core.cli.report import fmt_time, summary, write_json, write_samples
+from core.facade import Ncperf
+from core.model.errors import InputError, NcperfError, UsageError
+from core.model.machine import DEFAULT_PRESET, load_preset, preset_names, resolve_machine
 from core.model.toolpath import ExtractOptions
+from core.view.targets import VIEWS, ComparisonTarget, FileTarget
 
 DEMO_PROGRAM = "zlevel_cavity.ngc"
 DEMO_SVG = "ncperf-demo.svg"
@@ -231,8 +231,8 @@ def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
 
 
 def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
+    from core.cli.diagnosis_report import report, to_json
     from core.diagnosis.align import align
-    from core.diagnosis.diagnose import diagnose, report, to_json
     from core.engine.effects import setup_for
     from core.model.trace import TraceOptions
 
@@ -259,7 +259,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
         alignments.append(al)
         labels.append(Path(path).name)
     base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
-    d = diagnose(nc, tp, alignments, labels, base, args.baseline, effects)
+    d = nc.diagnose([(tp, alignments, labels)], base, args.baseline, effects)
     print(
         report(
             d,
@@ -278,7 +278,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
             fh.write("\n")
         print(f"  json             {args.json}")
     if args.svg:
-        from core.view.annotations import DiagnosisTarget
+        from core.view.targets import DiagnosisTarget
 
         written = nc.display(tp, d.annotations(), DiagnosisTarget(args.svg, d, view=args.view))
         print(f"  svg              {written}")

@@ -12,10 +12,10 @@ from typing import IO
 
 import numpy as np
 
-from core.facade import Analysis
 from core.engine.indicators import REDUCTION_LABELS, reduction_class
-from core.engine.profile import Profile, Samples
+from core.engine.profile import Samples
 from core.model.toolpath import KIND_LABELS
+from core.view.analysis import Analysis, totals
 
 PER_MIN = 60.0
 
@@ -31,55 +31,6 @@ def fmt_time(seconds: float) -> str:
         return f"{int(m)} min {s:04.1f} s"
     h, m = divmod(m, 60.0)
     return f"{int(h)} h {int(m):02d} min {s:04.1f} s"
-
-
-def rapid_time(an: Analysis) -> float:
-    """Rapids at the axes' max feed (s)."""
-    tp = an.toolpath
-    r = ~tp.is_feed
-    if not r.any():
-        return 0.0
-    v = an.evaluation.machine.rapid_speed(tp.tangent_start[r])
-    return float(np.sum(tp.length[r] / v))
-
-
-def totals(an: Analysis) -> dict[str, float | int]:
-    """Headline numbers of the summary and the JSON file."""
-    tp, ev = an.toolpath, an.evaluation
-    feed = tp.is_feed
-    below = feed & (tp.length < ev.min_length)
-    return {
-        "moves": tp.n,
-        "feed_moves": int(feed.sum()),
-        "arcs": int(tp.is_arc.sum()),
-        "rapids": int((~feed).sum()),
-        "operations": len(tp.op_names),
-        "feed_length_mm": tp.feed_length,
-        "rapid_length_mm": float(tp.length[~feed].sum()),
-        "programmed_time_s": tp.programmed_time,
-        "rapid_time_s": rapid_time(an),
-        "dwell_time_s": float(tp.dwell.sum()),
-        "paper_model_time_s": ev.paper_time,
-        "predicted_cycle_time_s": an.profile.cycle_time,
-        "share_at_90_percent": at_feed_share(an.profile, 0.9),
-        "below_L_share": float(tp.length[below].sum() / tp.feed_length) if tp.feed_length else 0.0,
-        "blocks_below_L": int(below.sum()),
-    }
-
-
-def at_feed_share(profile: Profile, fraction: float = 0.9) -> float:
-    """Share of the feed length run at ``fraction`` of the programmed feed or more."""
-    tp = profile.toolpath
-    f = tp.is_feed
-    if not f.any():
-        return 0.0
-    thr = fraction * tp.feed[f]
-    v0, v1, vp = profile.v_entry[f], profile.v_exit[f], profile.v_peak[f]
-    up = np.maximum((thr**2 - v0**2) / (2 * profile.a_up[f]), 0.0)
-    down = np.maximum((thr**2 - v1**2) / (2 * profile.a_down[f]), 0.0)
-    holds = profile.hold_start[f] + profile.hold_end[f]  # run at the (slower) boundary speeds
-    fast = np.where(vp >= thr * (1 - 1e-12), np.maximum(tp.length[f] - holds - up - down, 0.0), 0.0)
-    return float(fast.sum() / tp.length[f].sum())
 
 
 def class_table(an: Analysis) -> list[tuple[str, list[int]]]:

@@ -23,8 +23,9 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from core.model import geometry as g
 from core.engine.profile import points_along
+from core.model import geometry as g
+from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.model.trace import Trace
 
@@ -44,11 +45,6 @@ MIN_COVERAGE = 0.5
 #: How far behind its program line's move a sample may be (mm): actual positions lag the
 #: setpoint whose line the controller reports (v tau: 10 mm at 20 m/min and 30 ms).
 LAG_BACK = 10.0
-#: Distances (mm) that count as equal when two passes of the path coincide.
-TIE = 1e-3
-#: The same in the sequential search without lines, per mm of arc length from where the
-#: samples' own travel puts them (that estimate drifts, so the weight is lower).
-SEQ_TIE = 1e-4
 #: Half-width (samples) of the central difference that turns arc length into feed.
 DIFF_HALF = 2
 #: A trace's own feed column is used when it agrees with its positions: relative RMS
@@ -138,12 +134,12 @@ def _nearest(
     """Index of the nearest of ``p`` (k, 3) for each of ``q`` (m, 3), and the distance.
 
     With ``s_p`` (k,) and ``s_exp`` (m,), points equally near are told apart by how close
-    their arc length is to the expected one (a penalty of SEQ_TIE mm per mm of arc length).
+    their arc length is to the expected one (a penalty of TOL.sequence_tie mm per mm of arc length).
     """
     d2 = np.einsum("ij,ij->i", q, q)[:, None] - 2 * q @ p.T + np.einsum("ij,ij->i", p, p)[None, :]
     d2 = np.maximum(d2, 0.0)
     if s_p is not None and s_exp is not None:
-        k = np.argmin(d2 + (SEQ_TIE * (s_p[None, :] - s_exp[:, None])) ** 2, axis=1)
+        k = np.argmin(d2 + (TOL.sequence_tie * (s_p[None, :] - s_exp[:, None])) ** 2, axis=1)
     else:
         k = np.argmin(d2, axis=1)
     return k, np.sqrt(d2[np.arange(q.shape[0]), k])
@@ -187,7 +183,7 @@ def _project(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> tuple[NDA
                 dist[part] = dd
                 if win.size > own.size:
                     k2, d2 = _nearest(q[part], pts[win])
-                    nearer = d2 < dd - TIE
+                    nearer = d2 < dd - TOL.pass_tie
                     s[part[nearer]] = s_p[win[k2[nearer]]]
                     dist[part[nearer]] = d2[nearer]
             done[sel] = True
@@ -232,7 +228,7 @@ def _refine(q: NDArray, s_guess: NDArray, path, half_width: float = 1.0) -> tupl
         # Points of two passes of the path that coincide (a plunge down the retract):
         # the one nearer the guess along the path.
         ds = s_p[cand] - s_guess[part][:, None]
-        best = np.argmin(d2 + (TIE * ds) ** 2, axis=1)
+        best = np.argmin(d2 + (TOL.pass_tie * ds) ** 2, axis=1)
         rows = np.arange(best.size)
         s[part] = s_p[cand[rows, best]]
         dist[part] = np.sqrt(d2[rows, best])
@@ -257,7 +253,7 @@ def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> NDArray:
         near = _point_at(tp, s)
         step = np.median(sub - off - near, axis=0)
         off = off + step
-        if np.linalg.norm(step) < 1e-4:
+        if np.linalg.norm(step) < TOL.offset_step:
             break
     return off
 

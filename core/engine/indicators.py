@@ -9,7 +9,7 @@ over all plugins, capped by the programmed feed.
 
 from __future__ import annotations
 
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 from functools import cached_property
 from typing import Literal
@@ -101,6 +101,12 @@ class Indicator:
         object.__setattr__(self, "feed", feed)
         object.__setattr__(self, "limit", limit)
         object.__setattr__(self, "labels", tuple(self.labels))
+
+
+#: What produces the A2 results of a tool path on a machine: every registered plugin's
+#: indicators (:meth:`core.facade.Ncperf.indicators`). The engine takes it as an argument
+#: rather than the facade, so that it does not depend on the plugin manager.
+IndicatorSource = Callable[[ToolPath, Machine], list[Indicator]]
 
 
 @dataclass(frozen=True, eq=False)

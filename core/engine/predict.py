@@ -13,9 +13,9 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.diagnosis.align import _point_at, _refine, isotonic, sample_path
 from core.engine.effects import Setup
-from core.facade import Ncperf
-from core.engine.indicators import Evaluation, Indicator, combine
+from core.engine.indicators import Evaluation, Indicator, IndicatorSource, combine
 from core.engine.profile import Profile, build_profile
+from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 
 #: Time step of the predicted signal when time-domain effects are on (s); longer programs
@@ -132,7 +132,7 @@ class Prediction:
         if f is None:
             return self._raw_speed_at(s)
         _, ss, vv = f
-        keep = np.concatenate([[True], np.diff(ss) > 1e-12])
+        keep = np.concatenate([[True], np.diff(ss) > TOL.same_s])
         return np.interp(s, ss[keep], vv[keep])
 
     @cached_property
@@ -162,7 +162,7 @@ def _path_points(tp: ToolPath) -> tuple:
 
 def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:
     """y[k] = a y[k-1] + (1 - a) v[k], y[0] = v[0], vectorised in blocks of a few thousand."""
-    if a < 1e-6 or v.size == 0:
+    if a < TOL.negligible_pole or v.size == 0:
         return v.copy()
     out = np.empty_like(v)
     y = float(v[0])
@@ -192,8 +192,17 @@ def compression_runs(tp: ToolPath, max_angle: float, max_length: float) -> NDArr
     return inside & short[:-1] & short[1:] & (tp.turn_angle < max_angle)
 
 
-def predict(nc: Ncperf, tp: ToolPath, setup: Setup) -> Prediction:
-    """The prediction of ``setup`` on ``tp`` (see :mod:`core.engine.effects` for the steps)."""
+def predict(indicators_of: IndicatorSource, tp: ToolPath, setup: Setup) -> Prediction:
+    """The prediction of ``setup`` on ``tp`` (see :mod:`core.engine.effects` for the steps).
+
+    Parameters
+    ----------
+    indicators_of : callable (ToolPath, Machine) -> list of Indicator
+        The A2 evaluation (every registered plugin's indicators), e.g.
+        :meth:`core.facade.Ncperf.indicators`.
+    tp : ToolPath
+    setup : Setup
+    """
     changes = {}
     if setup.feed_scale != 1.0:
         changes["feed"] = tp.feed * setup.feed_scale
@@ -201,7 +210,7 @@ def predict(nc: Ncperf, tp: ToolPath, setup: Setup) -> Prediction:
         changes["tolerance"] = np.full(tp.n, float(setup.tolerance))
     tp2 = dataclasses.replace(tp, **changes) if changes else tp
     m = setup.machine
-    indicators = nc.indicators(tp2, m)
+    indicators = indicators_of(tp2, m)
     for fn in setup.element_caps:
         cap = np.asarray(fn(tp2, m), dtype=np.float64)
         idx = np.flatnonzero(tp2.is_feed & np.isfinite(cap))

@@ -52,8 +52,9 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core.model import geometry as g
 from core.engine.indicators import Evaluation
+from core.model import geometry as g
+from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, PathMode, ToolPath
 
 #: Most rounds of the jerk (effective acceleration) iteration, and when to stop early: the
@@ -61,8 +62,6 @@ from core.model.toolpath import MoveKind, PathMode, ToolPath
 #: speed changes, hence a lower A_eff), contracting by about 4 in log per round.
 JERK_ROUNDS = 12
 JERK_CONVERGED = 1e-4
-
-_EPS = 1e-9
 
 
 def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
@@ -88,7 +87,7 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
         t_short = 2.0 * np.sqrt(dv / j)
         t = np.where(dv >= a * a / j, t_full, t_short)
         out = dv / t
-    return np.where(np.isfinite(j) & (dv > _EPS), out, a)
+    return np.where(np.isfinite(j) & (dv > TOL.nil_speed), out, a)
 
 
 def s_curve(
@@ -109,10 +108,10 @@ def s_curve(
         a_p = np.minimum(acc, np.sqrt(dv * jerk))
         t_j = a_p / jerk
         total = dv / a_p + t_j
-        r = np.where((dv > _EPS) & np.isfinite(jerk) & (total > 0), t_j / total, 0.0)
+        r = np.where((dv > TOL.nil_speed) & np.isfinite(jerk) & (total > 0), t_j / total, 0.0)
     r = np.clip(np.nan_to_num(r), 0.0, 0.5)
     c = 1.0 / (1.0 - r)
-    rs = np.maximum(r, 1e-300)
+    rs = np.maximum(r, TOL.tiny)
     q = 1.0 - p
     first, last = p < r, p > 1.0 - r
     g = np.where(
@@ -290,9 +289,13 @@ class Profile:
         lo_u, dv_u, lo_d, dv_d, acc, jerk = self.ramps
         for rising in (True, False):
             if rising:
-                sel = np.flatnonzero((up <= down) & (up < self.v_peak[k]) & (dv_u[k] > _EPS))
+                sel = np.flatnonzero(
+                    (up <= down) & (up < self.v_peak[k]) & (dv_u[k] > TOL.nil_speed)
+                )
             else:
-                sel = np.flatnonzero((down < up) & (down < self.v_peak[k]) & (dv_d[k] > _EPS))
+                sel = np.flatnonzero(
+                    (down < up) & (down < self.v_peak[k]) & (dv_d[k] > TOL.nil_speed)
+                )
             if sel.size == 0:
                 continue
             kk = k[sel]
@@ -324,7 +327,7 @@ class Profile:
         if not dt > 0:
             raise ValueError(f"dt must be positive, got {dt}")
         tp = self.toolpath
-        n_s = int(np.floor(self.cycle_time / dt + 1e-9)) + 1
+        n_s = int(np.floor(self.cycle_time / dt + TOL.rel_equal)) + 1
         t = np.arange(n_s) * dt
         k = np.clip(np.searchsorted(self.start_time, t, side="right") - 1, 0, tp.n - 1)
         tau = t - self.start_time[k]
@@ -371,7 +374,9 @@ class Profile:
             lo_u, dv_u, lo_d, dv_d, acc, jerk = (r[k] for r in self.ramps)
             shift = np.zeros(t.size)
             for rising in (True, False):
-                sel = np.flatnonzero((in_up & (dv_u > _EPS)) if rising else (in_dn & (dv_d > _EPS)))
+                sel = np.flatnonzero(
+                    (in_up & (dv_u > TOL.nil_speed)) if rising else (in_dn & (dv_d > TOL.nil_speed))
+                )
                 if sel.size == 0:
                     continue
                 lo, dv = (lo_u[sel], dv_u[sel]) if rising else (lo_d[sel], dv_d[sel])
@@ -548,15 +553,19 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, N
     change of the ramp that phase belongs to (chains of moves accelerating end to end), and
     the ramp's lower speed (where an acceleration starts, where a braking ends)."""
     n = v0.size
-    tol = 1e-9 * np.maximum(peak, 1.0)
+    tol = TOL.rel_equal * np.maximum(peak, 1.0)
     if rising:
         phase = peak > v0 + tol
-        through = phase & ~(peak > v1 + tol) & (d_cr <= 1e-9)  # accelerating to its very end
+        through = (
+            phase & ~(peak > v1 + tol) & (d_cr <= TOL.nil_distance)
+        )  # accelerating to its very end
         cont = np.zeros(n, dtype=bool)
         cont[1:] = through[:-1] & phase[1:]
     else:
         phase = peak > v1 + tol
-        through = phase & ~(peak > v0 + tol) & (d_cr <= 1e-9)  # braking from its very start
+        through = (
+            phase & ~(peak > v0 + tol) & (d_cr <= TOL.nil_distance)
+        )  # braking from its very start
         cont = np.zeros(n, dtype=bool)
         cont[1:] = through[1:] & phase[:-1]
         # a braking chain runs forward from its first move; "cont[k]" links k-1 -> k

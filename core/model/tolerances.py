@@ -48,5 +48,67 @@ class Tolerances:
     #: Radius (mm) below which an arc is degenerate.
     min_arc_radius: float = 1e-6
 
+    #: A G or M code (stored as ten times its number) within this of a whole tenth is that
+    #: code (G64.1 is 641): the words are parsed from decimal text, so only the float
+    #: rounding of x10 separates them, ~1e-13.
+    code_number: float = 1e-6
+
+    #: A tool axis i,j,k further than this from unit length (CL data) is a misreading, not
+    #: rounding: CAM systems write it with 6-7 decimals.
+    unit_vector: float = 1e-3
+
+    #: Direction components (and lengths of direction vectors) closer than this are equal
+    #: (zero): far below the 6-7 decimals CAM writes, far above float rounding.
+    direction: float = 1e-9
+
+    #: Two unit tangents whose difference perpendicular to the first is below this are
+    #: parallel or reversed (model 1 then needs any perpendicular; the radius is 0 anyway).
+    reversal: float = 1e-12
+
+    # ---------------------------------------------------------------- numerical slack
+    #: Relative slack on comparisons of results that went through sums or iterations
+    #: (cycle times, scores, lengths): values within 1e-9 of each other are equal, well
+    #: above the accumulated rounding of a million-term sum (~1e-10 relative).
+    rel_equal: float = 1e-9
+
+    #: Relative slack on comparisons of a value with the same value computed another way in
+    #: one or two operations (a share of F, a full turn): a few ulps, 1e-12.
+    float_slack: float = 1e-12
+
+    #: Speeds and speed changes (mm/s) below this are nil: a nanometre per second.
+    nil_speed: float = 1e-9
+
+    #: Distances (mm) below this are nil where a length is the result of subtractions (a
+    #: cruise between two ramps): a picometre, below any physical meaning.
+    nil_distance: float = 1e-9
+
+    #: Arc lengths (mm) rising by less than this are one point for interpolation, which
+    #: needs strictly rising abscissae.
+    same_s: float = 1e-12
+
+    #: Smallest positive number used to keep a division defined in a branch whose result is
+    #: not used (the other branch of an ``np.where``).
+    tiny: float = 1e-300
+
+    #: A first-order lag whose pole exp(-dt / tau) is below this passes its input unchanged
+    #: (tau under dt / 14: less than a thousandth of a sample's weight carries over).
+    negligible_pole: float = 1e-6
+
+    # ---------------------------------------------------------------- alignment (traces)
+    #: Distances (mm) that count as equal when two passes of the path coincide (a plunge
+    #: down its own retract): a micrometre, below the resolution of the recordings.
+    pass_tie: float = 1e-3
+
+    #: The same in the sequential search without program lines, per mm of arc length from
+    #: where the samples' own travel puts them (that estimate drifts, so the weight is lower).
+    sequence_tie: float = 1e-4
+
+    #: The rigid offset between a trace and its program is converged when an iteration
+    #: moves it by less than this (mm): a tenth of a micrometre.
+    offset_step: float = 1e-4
+
+    #: Speeds (mm/s) below this are a stop when converting distance to time (1 um/s).
+    min_speed: float = 1e-3
+
 
 TOL = Tolerances()

@@ -1,0 +1,175 @@
+"""The reports of ``ncperf diagnose``: the terminal text, the JSON file, and the machine-file
+tables that fold the chosen effects into the machine (TOML).
+
+Gaps in mm/min, times in s; the thresholds quoted come from :mod:`core.diagnosis.rules`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping
+
+from core.diagnosis.diagnose import Diagnosis
+from core.diagnosis.gaps import GapZone
+from core.diagnosis.rules import ADD_SHARE, BEST_SHARE, GAP_SHARE, MIN_FEED_SHARE, STOP_SHARE
+from core.engine.effects import Effect
+from core.model.machine import Machine
+
+
+def _fmt_params(params: dict[str, float], eff: Effect) -> str:
+    units = {p.name: p.unit for p in eff.params}
+    return (
+        ", ".join(
+            f"{k}={v:.4g}{(' ' + units[k]) if units.get(k) else ''}" for k, v in params.items()
+        )
+        or "-"
+    )
+
+
+def toml_snippet(
+    d: Diagnosis, machine: Machine | None = None, effects: Mapping[str, Effect] | None = None
+) -> str:
+    """The machine-file tables that make the chosen effects part of the model (for a scale
+    the machine already folds in, the product of the two)."""
+    out = []
+    for name in d.chosen:
+        values = dict(d.chosen_params[name])
+        eff = effects.get(name) if effects is not None else None
+        if machine is not None and eff is not None and eff.relative:
+            before = eff.folded(machine)
+            values = {
+                k: v * before.get(k, 1.0) if k in eff.relative else v for k, v in values.items()
+            }
+        out.append(f"[effects.{name}]")
+        out.extend(f"{k} = {v:.6g}" for k, v in values.items())
+    return "\n".join(out)
+
+
+def report(
+    d: Diagnosis,
+    *,
+    program: str,
+    machine: str,
+    labels: list[str],
+    effects: dict[str, Effect],
+    machine_file: Machine | None = None,
+) -> str:
+    """The terminal report of ``ncperf diagnose`` (``machine_file``: the machine whose file
+    the suggested tables go into)."""
+    lines = [f"ncperf diagnose: {program} on {machine} (baseline: {d.baseline})"]
+    for lab, al in zip(labels, d.alignments, strict=True):
+        lines.append(
+            f"  trace            {lab}: {al.t.size:,} samples over {al.t[-1]:.2f} s; {al.message}"
+        )
+        for note in al.notes:
+            lines.append(f"                   {note}")
+    lines.append(f"  held-out data    {d.held_out}")
+    lines.append(
+        f"  gap before       {d.gap_rms_before:.1f} mm/min RMS over time "
+        "(measured - predicted feed on the feed moves)"
+    )
+    lines += _zone_table("  where it lies", d.zones)
+    lines.append(
+        "  effects          fitted on the calibration data; gap on the held-out data (mm/min):"
+    )
+    params = [_fmt_params(r.params, effects[r.name]) for r in d.effects]
+    width = max([len("parameters"), *map(len, params)])
+    lines.append(
+        f"    {'#':>2s}  {'effect':28s} {'parameters':{width}s} {'before':>8s} "
+        f"{'after':>8s} {'removed':>8s}"
+    )
+    for k, (r, ps) in enumerate(zip(d.effects, params, strict=True), start=1):
+        lines.append(
+            f"    {k:2d}  {r.name:28s} {ps:{width}s} "
+            f"{r.held_out_gap_before:8.1f} {r.held_out_gap_after:8.1f} "
+            f"{r.removed * 100:7.0f}%"
+        )
+    if d.best_effect is None:
+        lines.append(
+            f"  best effect      none: no effect removes {BEST_SHARE:.0%} of the held-out"
+            f" gap and {MIN_FEED_SHARE:.0%} of F (what is left is noise, or an effect not in"
+            " this list)"
+        )
+    else:
+        lines.append(f"  best effect      {d.best_effect}")
+        lines.append(
+            f"  chosen           {' + '.join(d.chosen)} (each removing at least "
+            f"{ADD_SHARE:.0%} of what was left on held-out data, until less than "
+            f"{STOP_SHARE:.0%} of the gap was left)"
+        )
+    lines.append(f"  gap after        {d.gap_rms_after:.1f} mm/min")
+    if d.chosen:
+        lines += _zone_table("  where it remains", d.zones_after[:5])
+        lines.append("  to model it      add to the machine file (or replace there):")
+        lines += [
+            "                   " + t for t in toml_snippet(d, machine_file, effects).splitlines()
+        ]
+    return "\n".join(lines)
+
+
+def _zone_table(title: str, zones: tuple[GapZone, ...]) -> list[str]:
+    if not zones:
+        return [f"{title:18s} nowhere beyond {GAP_SHARE:.0%} of F"]
+    out = [
+        f"{title}:",
+        f"    {'lines':13s} {'arc length [mm]':>19s} {'feature':20s} "
+        f"{'RMS gap':>14s} {'time':>10s}",
+    ]
+    for z in zones:
+        lines = f"{z.line_start}" if z.line_start == z.line_end else f"{z.line_start}-{z.line_end}"
+        out.append(
+            f"    {lines:13s} {z.s_start:9.1f}-{z.s_end:<9.1f} {z.feature:20s} "
+            f"{z.gap_rms:8.0f} mm/min {z.time_s:+8.3f} s"
+        )
+    return out
+
+
+def to_json(
+    d: Diagnosis, machine: Machine | None = None, effects: Mapping[str, Effect] | None = None
+) -> dict:
+    """The JSON report (gaps in mm/min, times in s: > 0 the machine is slower)."""
+
+    def zone(z: GapZone) -> dict:
+        return {
+            "line_start": z.line_start,
+            "line_end": z.line_end,
+            "s_start_mm": round(z.s_start, 3),
+            "s_end_mm": round(z.s_end, 3),
+            "feature": z.feature,
+            "gap_rms": round(z.gap_rms, 3),
+            "time_s": round(z.time_s, 4),
+        }
+
+    return {
+        "baseline": d.baseline,
+        "held_out": d.held_out,
+        "alignment": [
+            {
+                "method": a.method,
+                "ok": a.ok,
+                "message": a.message,
+                "offset_mm": [round(float(x), 4) for x in a.offset],
+                "coverage": round(a.coverage, 4),
+            }
+            for a in d.alignments
+        ],
+        "gap_rms_before": round(d.gap_rms_before, 3),
+        "zones": [zone(z) for z in d.zones],
+        "effects": [
+            {
+                "name": r.name,
+                "params": {k: round(v, 6) for k, v in r.params.items()},
+                "held_out_gap_before": round(r.held_out_gap_before, 3),
+                "held_out_gap_after": round(r.held_out_gap_after, 3),
+                "removed": round(r.removed, 4),
+            }
+            for r in d.effects
+        ],
+        "best_effect": d.best_effect,
+        "chosen": list(d.chosen),
+        "chosen_params": {
+            k: {p: round(v, 6) for p, v in ps.items()} for k, ps in d.chosen_params.items()
+        },
+        "gap_rms_after": round(d.gap_rms_after, 3),
+        "zones_after": [zone(z) for z in d.zones_after],
+        "machine_file_tables": toml_snippet(d, machine, effects),
+    }

@@ -1,0 +1,122 @@
+"""Fitting an effect's parameters to the calibration data: a grid, then a local refinement.
+
+An effect (:mod:`core.engine.effects`) is applied on top of a base setup; its parameters are
+those that minimise the RMS gap over time on the calibration data
+(:func:`core.diagnosis.resample.gap`).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+
+import numpy as np
+from numpy.typing import NDArray
+
+from core.diagnosis.resample import Data, gap
+from core.diagnosis.rules import GRID_1D, GRID_2D, GRID_ND, REFINE
+from core.engine.effects import Effect, Param, Setup
+from core.engine.indicators import IndicatorSource
+from core.engine.predict import Prediction, predict
+from core.model.tolerances import TOL
+from core.model.toolpath import ToolPath
+
+
+def _grid(p: Param, count: int) -> NDArray[np.float64]:
+    if p.log and p.low > 0:
+        g = np.geomspace(p.low, p.high, count)
+    else:
+        g = np.linspace(p.low, p.high, count)
+    if p.integer:
+        g = np.unique(np.round(g))
+    return g
+
+
+def predict_all(
+    indicators_of: IndicatorSource, tps: Sequence[ToolPath], setup: Setup
+) -> list[Prediction]:
+    """The prediction of ``setup`` for every program."""
+    return [predict(indicators_of, tp, setup) for tp in tps]
+
+
+def fit(
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    base: Setup,
+    eff: Effect,
+    data: Sequence[Data],
+) -> tuple[dict[str, float], list[Prediction]]:
+    """Parameters of ``eff`` (on top of ``base``) minimising the calibration gap."""
+    m = base.machine
+    defaults = eff.start(m)
+    cache: dict[tuple, tuple[float, list[Prediction]]] = {}
+
+    def score(values: dict[str, float]) -> float:
+        key = tuple(round(values[p.name], 12) for p in eff.params)
+        if key not in cache:
+            preds = predict_all(indicators_of, tps, eff.apply(base, values))
+            cache[key] = (gap(preds, data, "calibration"), preds)
+        return cache[key][0]
+
+    if not eff.params:
+        score({})
+        return {}, cache[()][1]
+    params = eff.params
+    if len(params) == 1:
+        p = params[0]
+        candidates = [{p.name: float(x)} for x in _grid(p, GRID_1D)]
+    else:
+        per = GRID_2D if len(params) == 2 else GRID_ND
+        grids = [_grid(p, per) for p in params]
+        mesh = np.meshgrid(*grids, indexing="ij")
+        candidates = [
+            dict(zip([p.name for p in params], map(float, vals), strict=True))
+            for vals in zip(*(g.ravel() for g in mesh), strict=True)
+        ]
+    # Defaults first: among equal scores the effect changes nothing.
+    candidates.insert(0, dict(defaults))
+    best = min(candidates, key=score)
+    if len(params) > 1:
+        # The coarse mesh can straddle a limit that only acts below a threshold (an axis
+        # speed under the programmed feed): scan each parameter on the fine 1-D grid, the
+        # others held at the best so far.
+        for p in params:
+            line = [best | {p.name: float(x)} for x in _grid(p, GRID_1D)]
+            best = min([best, *line], key=score)
+    # Local refinement, one parameter at a time: a bracket around the best value that halves
+    # (in log space for log parameters) every round.
+    brackets = {}
+    for p in params:
+        grid = _grid(p, GRID_1D)
+        k = int(np.argmin(np.abs(grid - best[p.name])))
+        brackets[p.name] = (float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)]))
+    for _ in range(REFINE):
+        for p in params:
+            lo, hi = brackets[p.name]
+            x = best[p.name]
+            geo = p.log and p.low > 0
+            mid = (lambda a, b: math.sqrt(a * b)) if geo else (lambda a, b: 0.5 * (a + b))
+            y1, y2 = mid(lo, x), mid(x, hi)
+            for y in (y1, y2):
+                y = float(round(y)) if p.integer else float(y)
+                trial = dict(best)
+                trial[p.name] = min(max(y, p.low), p.high)
+                if score(trial) < score(best):
+                    best = trial
+            x_new = best[p.name]
+            # Shrink the bracket around the (possibly new) best.
+            if x_new == x:
+                brackets[p.name] = (y1, y2)
+            elif x_new < x:
+                brackets[p.name] = (lo, x)
+            else:
+                brackets[p.name] = (x, hi)
+    # A parameter the data cannot see (a jerk scale on a machine without a jerk limit) goes
+    # back to its default rather than report a value at random.
+    for p in params:
+        trial = dict(best)
+        trial[p.name] = defaults[p.name]
+        if score(trial) <= score(best) * (1 + TOL.rel_equal):
+            best = trial
+    key = tuple(round(best[p.name], 12) for p in eff.params)
+    return best, cache[key][1]

@@ -1,0 +1,137 @@
+"""The measured feed on the path, the calibration / held-out split, and the gap.
+
+1. Every trace is aligned with the program (:mod:`core.diagnosis.align`); its feed is
+   resampled on the arc length of the feed moves every ``STEP`` mm.
+2. The gap is the measured minus the predicted feed there (mm/min in reports), its RMS taken
+   over time: every grid point weighs the time the machine spends there (step / measured
+   feed, floored at ``TIME_FLOOR`` of F), so that slow stretches -- where the time goes --
+   count as long as they last, not as long as they are.
+3. Calibration data (for fitting) and held-out data (for measuring) are other runs, or
+   alternate stretches of each run (:func:`split`).
+
+The thresholds are in :mod:`core.diagnosis.rules`.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from core.diagnosis.align import Alignment
+from core.diagnosis.rules import CHUNKS, GAP_PERIODS, MAX_POINTS, PER_MIN, STEP, TIME_FLOOR
+from core.engine.predict import Prediction
+from core.model.toolpath import ToolPath
+
+
+@dataclass(frozen=True, eq=False)
+class Data:
+    """Measured feed of one trace on the arc-length grid of the feed moves."""
+
+    s: NDArray[np.float64]
+    v: NDArray[np.float64]
+    feed: NDArray[np.float64]  # programmed F there (mm/s)
+    move: NDArray[np.int64]
+    calibration: NDArray[np.bool_]  # grid points used for fitting
+    label: str
+    weight: NDArray[np.float64]  # time spent at each grid point (s)
+    case: int = 0  # which program (tool path) the trace ran
+
+
+def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
+    """The aligned measured feed every ``step`` mm of the feed moves the trace covers."""
+    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
+    lo, hi = float(al.s.min()), float(al.s.max())
+    step = max(step, (hi - lo) / MAX_POINTS)
+    grid = np.arange(lo + 0.5 * step, hi, step)
+    move = np.clip(np.searchsorted(start_s, grid, side="right") - 1, 0, tp.n - 1)
+    keep = tp.is_feed[move]
+    grid, move = grid[keep], move[keep]
+    # Average the samples at one arc length (stops), then interpolate along the path.
+    s_u, first, inv = np.unique(al.s, return_index=True, return_inverse=True)
+    v_u = np.bincount(inv, weights=al.v) / np.bincount(inv)
+    # Not across a hole in the recording: grid points whose neighbouring samples are more
+    # than GAP_PERIODS sample periods apart in time are left out (event-based recordings,
+    # whose values hold until the next event, have none).
+    if al.t.size > 2 and s_u.size > 1 and al.method != "line and feed":
+        period = float(np.median(np.diff(al.t)))
+        last = np.append(first[1:] - 1, al.t.size - 1)  # s is non-decreasing in time
+        k = np.clip(np.searchsorted(s_u, grid), 1, s_u.size - 1)
+        hole = al.t[first[k]] - al.t[last[k - 1]] > GAP_PERIODS * period
+        grid, move = grid[~hole], move[~hole]
+    v = np.interp(grid, s_u, v_u)
+    feed = tp.feed[move]
+    weight = step / np.maximum(v, TIME_FLOOR * feed)
+    return Data(
+        s=grid,
+        v=v,
+        feed=feed,
+        move=move,
+        calibration=np.ones(grid.size, dtype=bool),
+        label=label,
+        weight=weight,
+        case=case,
+    )
+
+
+def split(data: list[Data]) -> tuple[list[Data], str]:
+    """Calibration / held-out split (see the module docstring).
+
+    Several runs of one program: alternate runs. Otherwise (one run, or one run of each of
+    several programs): alternate stretches of every run, the parity changing from run to run
+    so that what happens once per program (its end) is fitted on some programs and measured
+    on others.
+    """
+    programs = {d.case for d in data}
+    if len(data) >= 2 and len(programs) == 1:
+        out = [
+            dataclasses.replace(d, calibration=np.full(d.s.size, k % 2 == 0))
+            for k, d in enumerate(data)
+        ]
+        cal = ", ".join(d.label for k, d in enumerate(data) if k % 2 == 0)
+        held = ", ".join(d.label for k, d in enumerate(data) if k % 2 == 1)
+        return out, f"other runs: fitted on {cal}, measured on {held}"
+    out = []
+    for k, d in enumerate(data):
+        edges = np.quantile(d.s, np.linspace(0, 1, CHUNKS + 1))
+        chunk = np.clip(np.searchsorted(edges, d.s, side="right") - 1, 0, CHUNKS - 1)
+        out.append(dataclasses.replace(d, calibration=chunk % 2 == k % 2))
+    runs = "one run" if len(data) == 1 else f"each of {len(data)} runs"
+    return out, (
+        f"alternate stretches of {runs} ({CHUNKS} stretches of equal length, "
+        "every other one fitted and the others measured)"
+    )
+
+
+def gap(preds: list[Prediction], data: list[Data], which: str) -> float:
+    """RMS over time of measured - predicted feed (mm/min) on the calibration, held-out or
+    all data."""
+    sq, n = 0.0, 0.0
+    for d in data:
+        sel = (
+            d.calibration
+            if which == "calibration"
+            else ~d.calibration
+            if which == "held_out"
+            else np.ones(d.s.size, dtype=bool)
+        )
+        if not sel.any():
+            continue
+        r = d.v[sel] - preds[d.case].speed_at(d.s[sel])
+        w = d.weight[sel]
+        sq += float(np.sum(w * r * r))
+        n += float(w.sum())
+    return math.sqrt(sq / n) * PER_MIN if n > 0 else 0.0
+
+
+def feed_level(data: list[Data]) -> float:
+    """RMS over time of the programmed feed on the held-out data (mm/min)."""
+    sq, n = 0.0, 0.0
+    for d in data:
+        sel = ~d.calibration
+        sq += float(np.sum(d.weight[sel] * d.feed[sel] ** 2))
+        n += float(d.weight[sel].sum())
+    return math.sqrt(sq / n) * PER_MIN if n > 0 else 0.0

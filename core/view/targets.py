@@ -1,0 +1,79 @@
+"""What a display draws into: a file, several programs side by side, a diagnosis.
+
+A target names the output and the projection; its extension (or host) picks the display
+(the A3 hook stops at the first display that handles it).
+"""
+
+from __future__ import annotations
+
+import os
+from dataclasses import dataclass
+
+VIEWS = ("xy", "xz", "yz", "iso")
+
+
+def _file_target(target: object) -> None:
+    """Check a drawing target's view and keep its path as ``str`` (the targets are frozen)."""
+    object.__setattr__(target, "path", os.fspath(target.path))
+    if target.view not in VIEWS:
+        raise ValueError(f"view must be one of {VIEWS}, got {target.view!r}")
+
+
+@dataclass(frozen=True)
+class FileTarget:
+    """A file to draw into, with the projection to use.
+
+    Attributes
+    ----------
+    path : str or os.PathLike
+        Output file; its extension picks the display (``.svg`` ...). Kept as ``str``.
+    view : {"xy", "xz", "yz", "iso"}
+        Top view (xy, default), front (xz), side (yz) or isometric.
+    """
+
+    path: str | os.PathLike[str]
+    view: str = "xy"
+
+    def __post_init__(self) -> None:
+        _file_target(self)
+
+
+@dataclass(frozen=True, eq=False)
+class ComparisonTarget:
+    """A file to draw several programs into, side by side (``ncperf compare``).
+
+    Attributes
+    ----------
+    path : str
+        Output file; its extension picks the display.
+    panels : tuple of (label, ToolPath, Annotations)
+        The programs, in drawing order.
+    view : {"xy", "xz", "yz", "iso"}
+    """
+
+    path: str
+    panels: tuple
+    view: str = "xy"
+
+    def __post_init__(self) -> None:
+        _file_target(self)
+
+
+@dataclass(frozen=True, eq=False)
+class DiagnosisTarget:
+    """A file to draw a diagnosis into: the path coloured by gap, the gap zones, and measured
+    against predicted feed over arc length for the worst of them (``ncperf diagnose``).
+
+    Attributes
+    ----------
+    path : str
+    diagnosis : core.diagnosis.diagnose.Diagnosis
+    view : {"xy", "xz", "yz", "iso"}
+    """
+
+    path: str
+    diagnosis: object
+    view: str = "xy"
+
+    def __post_init__(self) -> None:
+        _file_target(self)

@@ -1,0 +1,191 @@
+"""The zones that lose the most time: stretches the predicted profile keeps below 90 % of the
+programmed feed around slow points, ranked by the time they lose against length / F."""
+
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.engine.indicators import Evaluation
+from core.engine.profile import Profile
+
+#: A junction or block is a slow point of a zone when its predicted feed is at least
+#: this much below the programmed feed (the paper's green class ends at 10 %).
+ZONE_THRESHOLD = 0.10
+
+
+@dataclass(frozen=True)
+class Zone:
+    """A stretch of the path the predicted profile keeps below 90 % of the programmed feed
+    around slow points (see :func:`find_zones`).
+
+    Attributes
+    ----------
+    rank : int
+        1 = worst (most time lost).
+    first, last : int
+        First and last move index involved (the moves braking into and accelerating out
+        of the zone included).
+    line_first, line_last : int
+        Lowest and highest source line involved.
+    length : float, mm
+        Path length of the zone: its moves, plus the braking end and accelerating start of
+        the moves around it.
+    discontinuities : int
+        Junctions in the zone predicted >= ZONE_THRESHOLD below F.
+    capped_blocks : int
+        Blocks in the zone whose own feed is capped (model 3 and element plugins).
+    worst_reduction : float
+        Largest reduction in the zone (0..1).
+    min_feed : float, mm/s
+        Lowest predicted feed in the zone.
+    programmed_feed : float, mm/s
+        Programmed feed where the minimum is.
+    cause : str
+        Indicator and limit of the minimum, e.g. "tangential: jerk X".
+    time_lost : float, s
+        Predicted time of the zone's moves minus their length / F (the profile's braking,
+        slow crossing and re-acceleration).
+    point : (3,) float, mm
+        Where the minimum is (for labels).
+    """
+
+    rank: int
+    first: int
+    last: int
+    line_first: int
+    line_last: int
+    length: float
+    discontinuities: int
+    capped_blocks: int
+    worst_reduction: float
+    min_feed: float
+    programmed_feed: float
+    cause: str
+    time_lost: float
+    point: tuple[float, float, float]
+
+    @property
+    def lines(self) -> str:
+        a, b = self.line_first, self.line_last
+        return f"{a}" if a == b else f"{a}-{b}"
+
+
+def zone_count(ev: Evaluation, profile: Profile) -> int:
+    """How many zones (see :func:`find_zones`) the program has."""
+    return _zones(ev, profile, None)
+
+
+def find_zones(ev: Evaluation, profile: Profile, count: int = 10) -> tuple[Zone, ...]:
+    """The ``count`` zones that cost the most time.
+
+    Moves whose predicted speed reaches (1 - ZONE_THRESHOLD) of the programmed feed, and
+    rapids, separate zones: a zone is what lies between two of them -- the braking end of
+    the first, every move in between (all kept below 90 % of F), the accelerating start of
+    the second. A zone is listed if it holds at least one slow point of the evaluation (a
+    junction or a block predicted ZONE_THRESHOLD or more below F); stretches slowed only by
+    starting and stopping (program ends, rapids, dwells) are not zones, though their time
+    is in the cycle time all the same. Zones are ranked by the time the profile loses on
+    them against length / F.
+    """
+    return _zones(ev, profile, count)
+
+
+def _zones(ev: Evaluation, profile: Profile, count: int | None):
+    tp = ev.toolpath
+    if tp.n == 0:
+        return () if count is not None else 0
+    feed = tp.is_feed
+    t_up, t_dn, d_up, d_dn, _ = profile._phases
+    th0, th1 = profile._hold_times
+    # The holds at a move's ends (inserted arcs) belong with its acceleration and braking.
+    d_up = d_up + profile.hold_start
+    d_dn = d_dn + profile.hold_end
+    with np.errstate(invalid="ignore", divide="ignore"):
+        fast = ~feed | (profile.v_peak >= (1.0 - ZONE_THRESHOLD) * tp.feed)
+        lost_up = np.where(feed, t_up + th0 - d_up / tp.feed, 0.0)
+        lost_dn = np.where(feed, t_dn + th1 - d_dn / tp.feed, 0.0)
+    brk = np.flatnonzero(fast)
+    n_z = brk.size + 1
+    # Zone of each move: zone m lies between break m-1 and break m.
+    zone_of = np.searchsorted(brk, np.arange(tp.n), side="left")
+    inner = ~fast
+    lost = np.bincount(zone_of[inner], weights=profile.lost_time[inner], minlength=n_z)
+    length = np.bincount(zone_of[inner], weights=tp.length[inner], minlength=n_z)
+    # Breaks: their accelerating start ends zone m, their braking end opens zone m + 1.
+    m = np.arange(brk.size)
+    np.add.at(lost, m, lost_up[brk])
+    np.add.at(lost, m + 1, lost_dn[brk])
+    np.add.at(length, m, np.where(feed[brk], d_up[brk], 0.0))
+    np.add.at(length, m + 1, np.where(feed[brk], d_dn[brk], 0.0))
+    # Move range of each zone: from the break before to the break after (where they brake
+    # or accelerate), clipped to the program.
+    first = np.concatenate([[0], brk])
+    last = np.concatenate([brk, [tp.n - 1]])
+
+    # Slow points of the evaluation, each with its zone.
+    jsel = np.flatnonzero(ev.junction_reduction >= ZONE_THRESHOLD)
+    jm = ev.junction[jsel]
+    j_zone = np.where(fast[jm], zone_of[jm] + 1, zone_of[jm])
+    esel = np.flatnonzero(feed & (np.nan_to_num(ev.element_reduction) >= ZONE_THRESHOLD))
+    e_zone = zone_of[esel] + fast[esel]
+    ratio = np.concatenate(
+        [
+            ev.junction_feed[jsel] / ev.junction_programmed[jsel],
+            ev.element_feed[esel] / tp.feed[esel],
+        ]
+    )
+    pt_zone = np.concatenate([j_zone, e_zone])
+    is_j = np.arange(ratio.size) < jsel.size
+    points = np.bincount(pt_zone, minlength=n_z)
+    n_j = np.bincount(pt_zone[is_j], minlength=n_z)
+    # The worst point of each zone: sort by (zone, ratio), take the first of each zone.
+    order = np.lexsort((ratio, pt_zone))
+    worst = np.full(n_z, -1, dtype=np.int64)
+    if order.size:
+        head = np.ones(order.size, dtype=bool)
+        head[1:] = pt_zone[order[1:]] != pt_zone[order[:-1]]
+        worst[pt_zone[order[head]]] = order[head]
+
+    candidates = np.flatnonzero(points > 0)
+    if count is None:
+        return len(candidates)
+    top = candidates[np.argsort(-lost[candidates], kind="stable")[:count]]
+    zones = []
+    for rank, z in enumerate(top, start=1):
+        k = int(worst[z])
+        if is_j[k]:
+            q = int(jsel[k])
+            cause = (
+                f"{ev.indicator_names[ev.junction_indicator[q]]}: {ev.labels[ev.junction_limit[q]]}"
+            )
+            min_feed, prog = float(ev.junction_feed[q]), float(ev.junction_programmed[q])
+            point = tp.end[ev.junction[q]]
+        else:
+            i = int(esel[k - jsel.size])
+            cause = (
+                f"{ev.indicator_names[ev.element_indicator[i]]}: {ev.labels[ev.element_limit[i]]}"
+            )
+            min_feed, prog = float(ev.element_feed[i]), float(tp.feed[i])
+            point = 0.5 * (tp.start[i] + tp.end[i])
+        a, b = int(first[z]), int(last[z])
+        zones.append(
+            Zone(
+                rank=rank,
+                first=a,
+                last=b,
+                line_first=int(tp.line[a : b + 1].min()),
+                line_last=int(tp.line[a : b + 1].max()),
+                length=float(length[z]),
+                discontinuities=int(n_j[z]),
+                capped_blocks=int(points[z] - n_j[z]),
+                worst_reduction=float(1.0 - min_feed / prog),
+                min_feed=min_feed,
+                programmed_feed=prog,
+                cause=cause,
+                time_lost=float(lost[z]),
+                point=(float(point[0]), float(point[1]), float(point[2])),
+            )
+        )
+    return tuple(zones)
