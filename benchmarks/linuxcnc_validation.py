@@ -47,7 +47,7 @@ def read_trace(path: Path) -> dict[str, np.ndarray]:
 
 def arc_length_of_samples(tp, pts: np.ndarray, lines: np.ndarray) -> np.ndarray:
     """Arc length (mm) of each sample, projected on the move of its program line."""
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
+    start_s = tp.start_s
     # The last move of each line (LinuxCNC reports a line for the whole block).
     line_to_move = {int(line): k for k, line in enumerate(tp.line)}
     k = np.array([line_to_move.get(int(v), -1) for v in lines])
@@ -81,9 +81,7 @@ def arc_length_of_samples(tp, pts: np.ndarray, lines: np.ndarray) -> np.ndarray:
 
 def paper_speed(ev, cap, s: np.ndarray) -> np.ndarray:
     tp = ev.toolpath
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
-    k = np.clip(np.searchsorted(start_s, s, side="right") - 1, 0, tp.n - 1)
-    return cap[k]
+    return cap[tp.move_at(s)]
 
 
 def validate(nc: Ncperf, prog: Path) -> dict[str, float]:
@@ -100,8 +98,7 @@ def validate(nc: Ncperf, prog: Path) -> dict[str, float]:
     keep = np.concatenate([[True], np.diff(s_meas) > 1e-9])
     grid = np.arange(0.0, float(tp.length.sum()), STEP)
     v_meas = np.interp(grid, s_meas[keep], v[keep])
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
-    k = np.clip(np.searchsorted(start_s, grid, side="right") - 1, 0, tp.n - 1)
+    k = tp.move_at(grid)
     feed = tp.is_feed[k]
     f = tp.feed[k][feed]
     v_full = pr.speed_at(grid)[feed]

@@ -11,8 +11,9 @@ import numpy as np
 import pytest
 
 from core import InputError
-from core.diagnosis.align import align, isotonic
+from core.diagnosis.align import align
 from core.engine.effects import Setup
+from core.model.sampling import isotonic
 from core.model.trace import Trace
 from tests.conftest import machine, path
 
@@ -39,9 +40,7 @@ def synthetic_trace(nc, tp, setup, dt=0.001, with_positions=True):
     tau = setup.servo_tau
     pred = nc.predict(tp, dataclasses.replace(setup, servo_tau=0.0))
     t, s, v = pred.signal()
-    from core.diagnosis.align import _point_at
-
-    pos = _point_at(tp, s)
+    pos = tp.point_at(s)
     if tau > 0:
         rest = int(8 * tau / dt)
         pos = np.concatenate([pos, np.repeat(pos[-1:], rest, axis=0)])
@@ -53,8 +52,7 @@ def synthetic_trace(nc, tp, setup, dt=0.001, with_positions=True):
         pos = lagged
         v = np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
         s = np.concatenate([s, np.full(rest, s[-1])])
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
-    k = np.clip(np.searchsorted(start_s, s, side="right") - 1, 0, tp.n - 1)
+    k = tp.move_at(s)
     return Trace(
         t=t - t[0], pos=pos if with_positions else None, v=v, line=tp.line[k], source="synthetic"
     )

@@ -1120,7 +1120,6 @@ def render_diagnosis(tp: ToolPath, ann: Annotations, diagnosis: object, view: st
     g_rapid, _ = panel(st, tp, np.where(sev < 0, -1, -2), ranked_styles)
     fr = st.frame
     zones = list(d.zones[:10])
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
     n_plots = min(4, len(zones))
     plot_w, plot_h = 420.0, 150.0
     width = 2 * MARGIN + PLOT_W + GAP + 2 * plot_w + 80
@@ -1151,11 +1150,7 @@ def render_diagnosis(tp: ToolPath, ann: Annotations, diagnosis: object, view: st
     # Numbered gap zones.
     out = ['<g font-size="13" font-weight="bold">\n']
     for k, z in enumerate(zones, start=1):
-        mv = int(
-            np.clip(
-                np.searchsorted(start_s, 0.5 * (z.s_start + z.s_end), side="right") - 1, 0, tp.n - 1
-            )
-        )
+        mv = int(tp.move_at(0.5 * (z.s_start + z.s_end)))
         ((x, y),) = fr.to_px(project(0.5 * (tp.start[mv : mv + 1] + tp.end[mv : mv + 1]), view))
         lines = f"{z.line_start}" if z.line_start == z.line_end else f"{z.line_start}-{z.line_end}"
         tip = (

@@ -49,7 +49,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import Machine, Ncperf, ToolPath, resolve_machine
-from core.engine.profile import points_along
+from core.engine.profile import boundary_caps as _unused  # noqa: F401
 from core.model import geometry as g
 
 from .effects import EFFECT_DOCS, EFFECTS, resolve_effect
@@ -145,7 +145,7 @@ def positions(
         if part.any():
             # On the program's own moves: the program's geometry (ncperf's, not its planner).
             k = sg.move[i[part]]
-            p[part] = points_along(tp, k, np.clip(sg.offset[i[part]] + dd[part], 0.0, tp.length[k]))
+            p[part] = tp.points_along(k, np.clip(sg.offset[i[part]] + dd[part], 0.0, tp.length[k]))
         if (~part).any():
             bb = b[~part]
             phi = (sg.phi0[i[~part]] + dd[~part] / sg.radius[bb])[:, None]

@@ -23,14 +23,12 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import NDArray
 
-from core.engine.profile import points_along
 from core.model import geometry as g
+from core.model.sampling import PROJECTION_STEP, PathSamples, isotonic
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.model.trace import Trace
 
-#: Path sampling step for projection (mm).
-STEP = 0.05
 #: Samples per sequential search chunk without line numbers, and how far ahead (mm) beyond
 #: what the fastest move could cover a chunk may look.
 CHUNK = 256
@@ -98,36 +96,6 @@ class Alignment:
     notes: tuple[str, ...] = field(default_factory=tuple)
 
 
-def isotonic(y: NDArray[np.float64]) -> NDArray[np.float64]:
-    """Least-squares non-decreasing fit of ``y`` (pool adjacent violators)."""
-    y = np.asarray(y, dtype=np.float64)
-    if y.size == 0 or np.all(np.diff(y) >= 0):
-        return y.copy()
-    vals: list[float] = []
-    counts: list[int] = []
-    for v in y.tolist():
-        vals.append(v)
-        counts.append(1)
-        while len(vals) > 1 and vals[-2] > vals[-1]:
-            c = counts[-2] + counts[-1]
-            vals[-2] = (vals[-2] * counts[-2] + vals[-1] * counts[-1]) / c
-            counts[-2] = c
-            vals.pop()
-            counts.pop()
-    return np.repeat(np.array(vals), np.array(counts))
-
-
-def sample_path(tp: ToolPath, step: float = STEP) -> tuple[NDArray, NDArray, NDArray]:
-    """Points every ``step`` mm along the path: (positions (p, 3), arc length (p,), move (p,))."""
-    counts = np.maximum(np.ceil(tp.length / step).astype(np.int64), 1)
-    owner = np.repeat(np.arange(tp.n), counts + 1)
-    first = np.cumsum(counts + 1) - (counts + 1)
-    k = np.arange(owner.size) - first[owner]
-    d = k / counts[owner] * tp.length[owner]
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
-    return points_along(tp, owner, d), start_s[owner] + d, owner
-
-
 def _nearest(
     q: NDArray, p: NDArray, s_p: NDArray | None = None, s_exp: NDArray | None = None
 ) -> tuple[NDArray, NDArray]:
@@ -145,9 +113,11 @@ def _nearest(
     return k, np.sqrt(d2[np.arange(q.shape[0]), k])
 
 
-def _project(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> tuple[NDArray, NDArray]:
+def _project(
+    tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples
+) -> tuple[NDArray, NDArray]:
     """Arc length and distance of points ``q`` on the path (see the module docstring)."""
-    pts, s_p, owner = path
+    pts, s_p, owner = path.points, path.s, path.move
     m = q.shape[0]
     s = np.zeros(m)
     dist = np.full(m, np.inf)
@@ -212,32 +182,9 @@ def _project(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> tuple[NDA
     return s, dist
 
 
-def _refine(q: NDArray, s_guess: NDArray, path, half_width: float = 1.0) -> tuple[NDArray, NDArray]:
-    """Nearest path point to each sample among those within +-half_width mm of arc length
-    of its guess: the guess decides which pass of the path, the projection where on it."""
-    pts, s_p, _ = path
-    k_off = np.arange(-int(half_width / STEP), int(half_width / STEP) + 1)
-    s = np.empty(q.shape[0])
-    dist = np.empty(q.shape[0])
-    for c in range(0, q.shape[0], 8192):
-        part = slice(c, c + 8192)
-        j = np.searchsorted(s_p, s_guess[part])
-        cand = np.clip(j[:, None] + k_off[None, :], 0, s_p.size - 1)
-        diff = pts[cand] - q[part][:, None, :]
-        d2 = np.einsum("mkj,mkj->mk", diff, diff)
-        # Points of two passes of the path that coincide (a plunge down the retract):
-        # the one nearer the guess along the path.
-        ds = s_p[cand] - s_guess[part][:, None]
-        best = np.argmin(d2 + (TOL.pass_tie * ds) ** 2, axis=1)
-        rows = np.arange(best.size)
-        s[part] = s_p[cand[rows, best]]
-        dist[part] = np.sqrt(d2[rows, best])
-    return s, dist
-
-
-def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> NDArray:
+def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples) -> NDArray:
     """Rigid offset (trace - program) by iterated projection (translation-only ICP)."""
-    pts = path[0]
+    pts = path.points
     cands = [np.zeros(3), q[0] - tp.start[0], np.median(q, axis=0) - np.median(pts, axis=0)]
     sub = q[:: max(1, q.shape[0] // 2000)]
     sub_lines = None if lines is None else lines[:: max(1, q.shape[0] // 2000)]
@@ -250,19 +197,12 @@ def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path) -> NDArray:
     off = best
     for _ in range(6):
         s, _ = _project(tp, sub - off, sub_lines, path)
-        near = _point_at(tp, s)
+        near = tp.point_at(s)
         step = np.median(sub - off - near, axis=0)
         off = off + step
         if np.linalg.norm(step) < TOL.offset_step:
             break
     return off
-
-
-def _point_at(tp: ToolPath, s: NDArray) -> NDArray:
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
-    k = np.clip(np.searchsorted(start_s, s, side="right") - 1, 0, tp.n - 1)
-    d = np.clip(s - start_s[k], 0.0, tp.length[k])
-    return points_along(tp, k, d)
 
 
 def _feed_from_positions(t: NDArray, q: NDArray) -> NDArray:
@@ -295,22 +235,21 @@ def _mismatch(t: NDArray, v_col: NDArray, v_pos: NDArray) -> float:
 
 def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True) -> Alignment:
     """Place every sample of ``trace`` on the path of ``tp`` (see the module docstring)."""
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
-    end_s = start_s + tp.length
+    start_s, end_s = tp.start_s, tp.end_s
     total_feed = float(tp.length[tp.is_feed].sum()) or float(tp.length.sum())
     tol = np.nan_to_num(tp.tolerance, nan=0.0)
     far = max(FAR, 20.0 * float(tol.max(initial=0.0)))
     notes: list[str] = []
     if trace.pos is not None:
-        path = sample_path(tp)
+        path = tp.sample(PROJECTION_STEP)
         off = _offset(tp, trace.pos, trace.line, path) if fit_offset else np.zeros(3)
         q = trace.pos - off
         s_raw, dist = _project(tp, q, trace.line, path)
         s = isotonic(s_raw)
         for _ in range(2):
-            s_raw, _ = _refine(q, s, path)
+            s_raw, _ = path.project_near(q, s)
             s = isotonic(s_raw)
-        dist = g.norm(q - _point_at(tp, s))
+        dist = g.norm(q - tp.point_at(s))
         method = "line and position" if trace.line is not None else "position"
         v_pos = _feed_from_positions(trace.t, q)
         v = v_pos
@@ -333,11 +272,7 @@ def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True) -> Alignment:
                 f"trace coordinates offset by ({off[0]:.3f}, {off[1]:.3f}, "
                 f"{off[2]:.3f}) mm from the program's"
             )
-        line = (
-            trace.line
-            if trace.line is not None
-            else tp.line[np.clip(np.searchsorted(start_s, s, side="right") - 1, 0, tp.n - 1)]
-        )
+        line = trace.line if trace.line is not None else tp.line[tp.move_at(s)]
         far_share = float(np.mean(dist > far))
     elif trace.line is not None and trace.v is not None:
         off = np.zeros(3)

@@ -43,11 +43,10 @@ class Data:
 
 def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
     """The aligned measured feed every ``step`` mm of the feed moves the trace covers."""
-    start_s = np.concatenate([[0.0], np.cumsum(tp.length)[:-1]])
     lo, hi = float(al.s.min()), float(al.s.max())
     step = max(step, (hi - lo) / MAX_POINTS)
     grid = np.arange(lo + 0.5 * step, hi, step)
-    move = np.clip(np.searchsorted(start_s, grid, side="right") - 1, 0, tp.n - 1)
+    move = tp.move_at(grid)
     keep = tp.is_feed[move]
     grid, move = grid[keep], move[keep]
     # Average the samples at one arc length (stops), then interpolate along the path.

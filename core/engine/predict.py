@@ -11,10 +11,10 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from core.diagnosis.align import _point_at, _refine, isotonic, sample_path
 from core.engine.effects import Setup
 from core.engine.indicators import Evaluation, Indicator, IndicatorSource, combine
 from core.engine.profile import Profile, build_profile
+from core.model.sampling import PROJECTION_STEP, isotonic
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 
@@ -45,10 +45,6 @@ class Prediction:
         return self.evaluation.toolpath
 
     @cached_property
-    def _start_s(self) -> NDArray[np.float64]:
-        return np.concatenate([[0.0], np.cumsum(self.toolpath.length)[:-1]])
-
-    @cached_property
     def block_speed(self) -> NDArray[np.float64]:
         """(n,) each block's own predicted feed; rapids at the axes' max feed."""
         tp = self.toolpath
@@ -61,7 +57,7 @@ class Prediction:
     def _raw_speed_at(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
         if self.profile is not None:
             return self.profile.speed_at(s)
-        k = np.clip(np.searchsorted(self._start_s, s, side="right") - 1, 0, self.toolpath.n - 1)
+        k = self.toolpath.move_at(s)
         return self.block_speed[k]
 
     @cached_property
@@ -87,7 +83,7 @@ class Prediction:
         tail = head + int(np.ceil(8.0 * su.servo_tau / dt)) + 1
         s = np.concatenate([np.full(head, s[0]), s, np.full(tail, s[-1])])
         t = (np.arange(s.size) - head) * dt + t[0]
-        pos = _point_at(tp, s)
+        pos = tp.point_at(s)
         k = max(int(round(su.filter_window / dt)), 1) if su.filter_window > 0 else 1
         if k > 1:
             kernel = np.ones(k) / k
@@ -101,9 +97,8 @@ class Prediction:
         v = np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
         # Where the filtered positions are on the path: near the setpoint of tau earlier
         # (within a millimetre of it).
-        path = _path_points(tp)
         guess = np.interp(t - su.servo_tau, t, s)
-        s_obs, _ = _refine(pos, guess, path, half_width=1.0)
+        s_obs, _ = tp.sample(PROJECTION_STEP).project_near(pos, guess, half_width=1.0)
         return t, isotonic(s_obs), v
 
     def signal(self, *, raw: bool = False) -> tuple[NDArray, NDArray, NDArray]:
@@ -122,7 +117,7 @@ class Prediction:
         dt = max(SIGNAL_DT, float(t_edges[-1]) / MAX_SAMPLES)
         t = np.arange(0.0, t_edges[-1], dt)
         k = np.clip(np.searchsorted(t_edges, t, side="right") - 1, 0, tp.n - 1)
-        s = self._start_s[k] + (t - t_edges[k]) * v[k]
+        s = tp.start_s[k] + (t - t_edges[k]) * v[k]
         return t, s, v[k]
 
     def speed_at(self, s: ArrayLike) -> NDArray[np.float64]:
@@ -142,22 +137,6 @@ class Prediction:
             return self.profile.cycle_time
         tp = self.toolpath
         return float(np.sum(tp.length / self.block_speed) + tp.dwell.sum())
-
-
-_PATHS: dict[int, tuple[ToolPath, tuple]] = {}
-
-
-def _path_points(tp: ToolPath) -> tuple:
-    """The alignment's path points of ``tp`` (the last few tool paths' are kept: a fit
-    filters many predictions of one path)."""
-    hit = _PATHS.get(id(tp))
-    if hit is not None and hit[0] is tp:
-        return hit[1]
-    if len(_PATHS) >= 4:
-        _PATHS.pop(next(iter(_PATHS)))
-    path = sample_path(tp)
-    _PATHS[id(tp)] = (tp, path)
-    return path
 
 
 def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:

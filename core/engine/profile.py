@@ -53,9 +53,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from core.engine.indicators import Evaluation
-from core.model import geometry as g
 from core.model.tolerances import TOL
-from core.model.toolpath import MoveKind, PathMode, ToolPath
+from core.model.toolpath import PathMode, ToolPath
 
 #: Most rounds of the jerk (effective acceleration) iteration, and when to stop early: the
 #: effective accelerations fall monotonically (a lower A_eff gives lower peaks, hence smaller
@@ -233,11 +232,6 @@ class Profile:
         return np.concatenate([[0.0], np.cumsum(span)[:-1]])
 
     @cached_property
-    def start_s(self) -> NDArray[np.float64]:
-        """(n,) arc length at which each move starts (mm)."""
-        return np.concatenate([[0.0], np.cumsum(self.toolpath.length)[:-1]])
-
-    @cached_property
     def _phases(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
         """Durations and lengths of each move's acceleration, cruise and braking (between
         its holds)."""
@@ -274,8 +268,8 @@ class Profile:
         if s.ndim != 1:
             return self.speed_at(s.reshape(-1)).reshape(s.shape)
         tp = self.toolpath
-        k = np.clip(np.searchsorted(self.start_s, s, side="right") - 1, 0, tp.n - 1)
-        d = np.clip(s - self.start_s[k], 0.0, tp.length[k])
+        k = tp.move_at(s)
+        d = np.clip(s - tp.start_s[k], 0.0, tp.length[k])
         h0, h1 = self.hold_start[k], self.hold_end[k]
         into = np.maximum(d - h0, 0.0)
         up = np.sqrt(np.maximum(self.v_entry[k] ** 2 + 2 * self.a_up[k] * into, 0.0))
@@ -387,39 +381,19 @@ class Profile:
                 sign = 1.0 if rising else -1.0
                 shift[sel] = sign * (dv * dv / a) * (big_g - 0.5 * p * p)
                 v[sel] = lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
-            s_abs = self.start_s[k] + d + shift
-            k = np.clip(np.searchsorted(self.start_s, s_abs, side="right") - 1, 0, tp.n - 1)
-            d = np.clip(s_abs - self.start_s[k], 0.0, tp.length[k])
-        pts = points_along(tp, k, d)
+            s_abs = tp.start_s[k] + d + shift
+            k = tp.move_at(s_abs)
+            d = np.clip(s_abs - tp.start_s[k], 0.0, tp.length[k])
+        pts = tp.points_along(k, d)
         return Samples(
             t=t,
-            s=self.start_s[k] + d,
+            s=tp.start_s[k] + d,
             x=pts[:, 0],
             y=pts[:, 1],
             z=pts[:, 2],
             v=np.maximum(v, 0.0),
             line=tp.line[k],
         )
-
-
-def points_along(tp: ToolPath, k: NDArray[np.int64], d: NDArray[np.float64]) -> NDArray:
-    """(m, 3) points at distance ``d`` (mm) from the start of moves ``k``."""
-    with np.errstate(divide="ignore", invalid="ignore"):
-        frac = np.where(tp.length[k] > 0, d / tp.length[k], 0.0)
-    out = tp.start[k] + frac[:, None] * (tp.end[k] - tp.start[k])
-    arc = tp.is_arc[k]
-    if arc.any():
-        ka = k[arc]
-        out[arc] = g.arc_points(
-            tp.start[ka],
-            tp.center[ka],
-            tp.normal[ka],
-            tp.kind[ka] == MoveKind.ARC_CCW,
-            tp.sweep[ka],
-            tp.pitch[ka],
-            frac[arc],
-        )
-    return out
 
 
 def boundary_caps(ev: Evaluation, cap: NDArray[np.float64]) -> NDArray[np.float64]:

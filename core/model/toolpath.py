@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.model import geometry as g
 from core.model.errors import Notice
+from core.model.sampling import PathSamples
 from core.model.tolerances import TOL
 
 
@@ -346,6 +347,78 @@ class ToolPath:
         if self.n < 2:
             return np.zeros(0)
         return g.norm(self.curvature_vector_end[:-1] - self.curvature_vector_start[1:])
+
+    # ------------------------------------------------------------------ arc length
+    @cached_property
+    def start_s(self) -> NDArray[np.float64]:
+        """(n,) arc length (mm) from the program start at which each move starts (rapids
+        included)."""
+        return np.concatenate([[0.0], np.cumsum(self.length)[:-1]])
+
+    @cached_property
+    def end_s(self) -> NDArray[np.float64]:
+        """(n,) arc length (mm) at which each move ends."""
+        return self.start_s + self.length
+
+    def move_at(self, s: ArrayLike) -> NDArray[np.int64]:
+        """Index of the move at arc lengths ``s`` (mm): the later move at a boundary, the
+        first or last move before the start or past the end."""
+        s = np.asarray(s, dtype=np.float64)
+        return np.clip(np.searchsorted(self.start_s, s, side="right") - 1, 0, self.n - 1)
+
+    def points_along(self, k: ArrayLike, d: ArrayLike) -> NDArray[np.float64]:
+        """(m, 3) points at distances ``d`` (mm, (m,)) from the start of moves ``k`` ((m,)),
+        on the move's line or (helical) arc."""
+        k = np.asarray(k, dtype=np.int64)
+        d = np.asarray(d, dtype=np.float64)
+        if k.shape != d.shape or k.ndim != 1:
+            raise ValueError(f"k and d must have one shape (m,), got {k.shape} and {d.shape}")
+        with np.errstate(divide="ignore", invalid="ignore"):
+            frac = np.where(self.length[k] > 0, d / self.length[k], 0.0)
+        out = self.start[k] + frac[:, None] * (self.end[k] - self.start[k])
+        arc = self.is_arc[k]
+        if arc.any():
+            ka = k[arc]
+            out[arc] = g.arc_points(
+                self.start[ka],
+                self.center[ka],
+                self.normal[ka],
+                self.kind[ka] == MoveKind.ARC_CCW,
+                self.sweep[ka],
+                self.pitch[ka],
+                frac[arc],
+            )
+        return out
+
+    def point_at(self, s: ArrayLike) -> NDArray[np.float64]:
+        """(m, 3) points at arc lengths ``s`` (mm, (m,)), clipped to the path."""
+        s = np.asarray(s, dtype=np.float64)
+        k = self.move_at(s)
+        d = np.clip(s - self.start_s[k], 0.0, self.length[k])
+        return self.points_along(k, d)
+
+    def sample(self, step: float) -> PathSamples:
+        """Points about every ``step`` mm along the path, each move's ends included (kept:
+        the same step asked again costs nothing)."""
+        hit = self._samples.get(step)
+        if hit is None:
+            counts = np.maximum(np.ceil(self.length / step).astype(np.int64), 1)
+            owner = np.repeat(np.arange(self.n), counts + 1)
+            first = np.cumsum(counts + 1) - (counts + 1)
+            k = np.arange(owner.size) - first[owner]
+            d = k / counts[owner] * self.length[owner]
+            hit = PathSamples(
+                points=self.points_along(owner, d),
+                s=self.start_s[owner] + d,
+                move=owner,
+                step=float(step),
+            )
+            self._samples[step] = hit
+        return hit
+
+    @cached_property
+    def _samples(self) -> dict[float, PathSamples]:
+        return {}
 
     # ------------------------------------------------------------------ totals
     @cached_property
