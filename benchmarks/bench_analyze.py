@@ -2,7 +2,7 @@
 
 Not a test: from the repository root (package installed) run
 
-    python benchmarks/bench_analyze.py [--runs 3] [--moves 1000000]   (or PYTHONPATH=. python ...)
+    python benchmarks/bench_analyze.py [--runs 3] [--moves 1000000]
 
 Programs: ``stellabee1.ngc`` (169k lines, LinuxCNC's trajectory-planner test suite, in
 ../shared; skipped when absent) and a generated zig-zag finishing raster of 1,000,000
@@ -26,23 +26,20 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
+from gen_finishing import generate  # benchmarks/ is on sys.path: the script's own folder
 
-from gen_finishing import generate  # noqa: E402
+ROOT = Path(__file__).resolve().parents[1]
 
 STELLABEE = ROOT.parent / "shared" / "data" / "gcode" / "linuxcnc-tp-tests" / "stellabee1.ngc"
 
 
 def run_ncperf(*args: str) -> tuple[float, float]:
     """Wall time (s) and peak RSS (MB) of one ``ncperf ARGS`` process."""
-    env = dict(os.environ, PYTHONPATH=str(ROOT))
     t0 = time.perf_counter()
     proc = subprocess.Popen(
         [sys.executable, "-m", "core", *args],
         stdout=subprocess.DEVNULL,
         stderr=subprocess.DEVNULL,
-        env=env,
     )
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t0

@@ -1,6 +1,6 @@
 """Speed and memory of the CL data reader (A1, ``adapters.cl_data``) on million-GOTO files.
 
-Not a test: from the repository root (package installed, or with ``PYTHONPATH=.``) run
+Not a test: from the repository root (package installed) run
 
     python benchmarks/bench_cl_data.py [GOTOS]
 

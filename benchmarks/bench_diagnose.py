@@ -2,10 +2,10 @@
 
 Not a test: from the repository root (package installed) run
 
-    PYTHONPATH=.:benchmarks python benchmarks/bench_diagnose.py [--runs 1] [--t-block 0.024]
+    python benchmarks/bench_diagnose.py [--runs 1] [--t-block 0.024]
 
 The trace is a whole program's recording at 1 ms: the bundled Z-level cavity of G1 chords
-(examples/zlevel_cavity_chords.ngc) run on the reference interpreter (benchmarks/vm) on the
+(examples/zlevel_cavity_chords.ngc) run on the reference interpreter (refvm) on the
 ``siemens-840d`` preset with its block time raised to ``--t-block`` (the README's picture).
 The diagnosis aligns every sample, fits all registered effects and writes the SVG; each run
 is a fresh ``python -m core diagnose`` process, wall time measured around it and peak memory
@@ -24,11 +24,12 @@ import tempfile
 import time
 from pathlib import Path
 
-ROOT = Path(__file__).resolve().parents[1]
-sys.path.insert(0, str(ROOT / "benchmarks"))
+from bench_analyze import run_ncperf  # benchmarks/ is on sys.path: the script's own folder
 
-from bench_analyze import run_ncperf  # noqa: E402
-from vm.virtual_machine import simulate, write_csv  # noqa: E402
+from core import Ncperf, load_preset
+from refvm import simulate, write_csv
+
+ROOT = Path(__file__).resolve().parents[1]
 
 PROGRAM = ROOT / "examples" / "zlevel_cavity_chords.ngc"
 PRESET = "siemens-840d"
@@ -43,7 +44,10 @@ def main() -> int:
     with tempfile.TemporaryDirectory() as tmp:
         trace_path = Path(tmp) / "trace.csv"
         t0 = time.perf_counter()
-        trace = simulate(str(PROGRAM), PRESET, "block_cycle_time", {"t_block": args.t_block})
+        toolpath = Ncperf().extract(str(PROGRAM))
+        trace = simulate(
+            toolpath, load_preset(PRESET), "block_cycle_time", {"t_block": args.t_block}
+        )
         write_csv(trace, trace_path)
         t_vm = time.perf_counter() - t0
         n = len(trace.t)

@@ -1,7 +1,7 @@
 """Diagnosing LinuxCNC 2.9's planner from the visible trace suite, and folding the result into
 the machine preset.
 
-Not a test: ``PYTHONPATH=. python benchmarks/linuxcnc_diagnosis.py [--machine PRESET]``
+Not a test: ``python benchmarks/linuxcnc_diagnosis.py [--machine PRESET]``
 (needs ../shared). All ten programs of ``../shared/data/linuxcnc/suite/`` with their traces
 are diagnosed together: effects are fitted on the even-numbered programs and measured on the
 odd-numbered ones (other programs as held-out data), once against the paper's point model

@@ -1,6 +1,6 @@
 """Predicted profile and cycle time against LinuxCNC 2.9's real trajectory planner.
 
-Not a test: from the repository root run ``PYTHONPATH=. python benchmarks/linuxcnc_validation.py``
+Not a test: from the repository root run ``python benchmarks/linuxcnc_validation.py``
 (needs ../shared). For every program of ``../shared/data/linuxcnc/suite/`` (traces recorded
 at 1 ms from LinuxCNC's planner on the simulated mill of the ``linuxcnc-sim`` preset):
 

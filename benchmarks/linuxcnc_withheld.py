@@ -2,7 +2,7 @@
 ``ncperf diagnose`` is not told about. Does it name the change, and how far does the gap
 shrink once it is modelled?
 
-Not a test: ``PYTHONPATH=. python benchmarks/linuxcnc_withheld.py [--cache DIR]`` (needs
+Not a test: ``python benchmarks/linuxcnc_withheld.py [--cache DIR]`` (needs
 ../shared and LinuxCNC, installed by ``../shared/tools/linuxcnc/install_linuxcnc.sh``; the
 runs are sequential and in real time, about 40 s per variant).
 

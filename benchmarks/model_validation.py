@@ -1,6 +1,6 @@
 """The paper's point models against a real controller's planner (LinuxCNC 2.9), per point.
 
-Not a test: from the repository root run ``PYTHONPATH=. python benchmarks/model_validation.py``
+Not a test: from the repository root run ``python benchmarks/model_validation.py``
 (needs ../shared). The programs and LinuxCNC's measured speeds come from the shared
 harness (``../shared/tools/linuxcnc/programs``, ``../shared/data/linuxcnc/*.summary.txt``):
 

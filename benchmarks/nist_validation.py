@@ -1,6 +1,6 @@
 """Predicted against measured block times on a real machine: the NIST Hurco recording.
 
-Not a test: ``PYTHONPATH=. python benchmarks/nist_validation.py`` (needs ../shared).
+Not a test: ``python benchmarks/nist_validation.py`` (needs ../shared).
 Data: NIST Smart Manufacturing Systems Test Bed, box part OP2 on a Hurco VMC (2017),
 ``BOX_REV-A_OP2_Front.NC`` (Fanuc-style, inch) and 12 MTConnect SHDR recordings
 (``timestamp|key|value``; ``Block_Number`` is the program line being run, sampled on change

@@ -1,10 +1,10 @@
 """Does ``ncperf diagnose`` find an effect it is not told about? A confusion table.
 
-Not a test: ``PYTHONPATH=.:benchmarks python benchmarks/withheld_effects.py [--seed N]
-[--draws K] [--full]`` (about 15 minutes on 2 cores with the defaults).
+Not a test: ``python benchmarks/withheld_effects.py [--seed N] [--draws K] [--full]`` (about
+15 minutes on 2 cores with the defaults).
 
 Every case runs a set of bundled example programs on the reference virtual machine
-(``benchmarks/vm``, an interpolator independent of ``core.engine.profile``) with **one** controller
+(``refvm``, an interpreter that imports nothing of ncperf) with **one** controller
 effect switched on at a random strength (seeded: the same seed gives the same cases),
 records 1 ms traces, and hands them to the diagnosis without saying which effect was on. The
 diagnosis fits every effect it knows on alternate programs and measures it on the others
@@ -40,9 +40,8 @@ from core.diagnosis.align import align
 from core.engine.effects import setup_for
 from core.model.machine import Machine, resolve_machine
 from core.model.trace import Trace
-
-sys.path.insert(0, str(Path(__file__).resolve().parent))
-from vm.virtual_machine import simulate  # noqa: E402
+from refvm import EFFECTS as VM_EFFECTS
+from refvm import simulate
 
 EXAMPLES = Path(__file__).resolve().parents[1] / "examples"
 #: Corners at two feeds, arcs with curvature jumps, short blocks; --full adds the cavity.
@@ -86,18 +85,8 @@ def draw(effect: str, m: Machine, rng: np.random.Generator) -> dict[str, float] 
     raise ValueError(effect)
 
 
-EFFECTS = (
-    "feed_override",
-    "block_cycle_time",
-    "corner_tolerance",
-    "normal_acceleration_factor",
-    "arc_feed_limit",
-    "axis_dynamics",
-    "lookahead_depth",
-    "servo_lag",
-    "jerk_filter",
-    "path_compression",
-)
+#: The effects the reference interpreter can switch on (its table's names).
+EFFECTS = tuple(VM_EFFECTS)
 
 
 def trace_of(sim, source: str) -> Trace:
@@ -114,7 +103,7 @@ def trace_of(sim, source: str) -> Trace:
 def run_case(nc, effects, machine, tps, effect, params):
     cases = []
     for name, tp in tps.items():
-        sim = simulate(tp, machine, effect, params, ncperf=nc)
+        sim = simulate(tp, machine, effect, params)
         cases.append((tp, [align(tp, trace_of(sim, f"vm:{name}"))], [name]))
     base = setup_for(machine, effects, ramps=True)
     return nc.diagnose(cases, base, "profile", effects)

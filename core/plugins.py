@@ -17,6 +17,24 @@ import pluggy
 from core import hookspecs
 from core.model.errors import UsageError
 
+#: The controller effects ncperf ships, one module each in ``plugins/effects/`` (the order
+#: they are registered and fitted in): the one list of their names.
+BUILTIN_EFFECTS: tuple[str, ...] = (
+    "acceleration_ramps",
+    "lookahead_depth",
+    "block_cycle_time",
+    "corner_tolerance",
+    "normal_acceleration_factor",
+    "arc_feed_limit",
+    "axis_dynamics",
+    "feed_override",
+    "servo_lag",
+    "jerk_filter",
+    "path_compression",
+    "last_block_acceleration",
+    "arc_acceleration",
+)
+
 #: Built-in plugins, by module name; registered under that name.
 BUILTIN_PLUGINS: tuple[str, ...] = (
     "adapters.gcode",
@@ -29,24 +47,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "plugins.ncu_capacity",
     "plugins.exact_stop",
     "plugins.feed_limit",
-    *(
-        f"plugins.effects.{name}"
-        for name in (
-            "acceleration_ramps",
-            "lookahead_depth",
-            "block_cycle_time",
-            "corner_tolerance",
-            "normal_acceleration_factor",
-            "arc_feed_limit",
-            "axis_dynamics",
-            "feed_override",
-            "servo_lag",
-            "jerk_filter",
-            "path_compression",
-            "last_block_acceleration",
-            "arc_acceleration",
-        )
-    ),
+    *(f"plugins.effects.{name}" for name in BUILTIN_EFFECTS),
 )
 
 DISABLE_ENV = "NCPERF_DISABLE_PLUGINS"

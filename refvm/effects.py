@@ -1,7 +1,8 @@
 """The controller effects the virtual machine can switch on, one at a time.
 
-:data:`EFFECTS` is the table ncperf's diagnosis (issue 5) shares: ``{name: {param: (low,
-high, default)}}`` in ncperf's internal units (s, mm, degrees for angles). A default of
+:data:`EFFECTS` is ``{name: {param: (low, high, default)}}`` in the interpreter's units (s,
+mm, degrees for angles); its names are those of ncperf's effects, so that a diagnosis can be
+scored against the effect switched on here. A default of
 ``None`` means "the machine's own value" (named in :data:`MACHINE_DEFAULTS`).
 :data:`EFFECT_DOCS` states the exact semantics of each switch; :func:`resolve_effect`
 checks a request against the table.
@@ -15,10 +16,10 @@ from __future__ import annotations
 import math
 from collections.abc import Mapping
 
-from core import Machine
+from refvm.machine import MachineLimits
 
 EFFECTS: dict[str, dict[str, tuple[float, float, float | None]]] = {
-    "lookahead_depth": {"blocks": (1, 200, 20)},
+    "feed_override": {"scale": (0.5, 1.5, 1.0)},
     "block_cycle_time": {"t_block": (0.0002, 0.05, None)},
     "corner_tolerance": {"tolerance": (0.0005, 1.0, None)},
     "normal_acceleration_factor": {"factor": (0.2, 1.0, 1.0)},
@@ -28,13 +29,13 @@ EFFECTS: dict[str, dict[str, tuple[float, float, float | None]]] = {
         "jerk_scale": (0.25, 4.0, 1.0),
         "feed_scale": (0.05, 4.0, 1.0),
     },
-    "feed_override": {"scale": (0.5, 1.5, 1.0)},
+    "lookahead_depth": {"blocks": (1, 200, 20)},
     "servo_lag": {"tau": (0.0, 0.2, 0.0)},
     "jerk_filter": {"window": (0.0, 0.1, 0.0)},
     "path_compression": {"max_angle": (0.5, 20.0, 5.0), "max_length": (0.5, 10.0, 3.0)},
 }
 
-#: Defaults taken from the machine: (effect, param) -> Machine attribute.
+#: Defaults taken from the machine: (effect, param) -> MachineLimits attribute.
 MACHINE_DEFAULTS: dict[tuple[str, str], str] = {
     ("block_cycle_time", "t_block"): "interpolation_time",
     ("corner_tolerance", "tolerance"): "path_tolerance",
@@ -113,7 +114,7 @@ EFFECT_DOCS: dict[str, str] = {
 
 
 def resolve_effect(
-    effect: str | None, params: Mapping[str, object] | None, machine: Machine
+    effect: str | None, params: Mapping[str, object] | None, machine: MachineLimits
 ) -> dict[str, float]:
     """Check an effect request against :data:`EFFECTS` and fill in the defaults.
 
@@ -123,7 +124,7 @@ def resolve_effect(
         An :data:`EFFECTS` name; None for the controller without effect.
     params : mapping of str to number, optional
         Parameter values; missing ones take their default.
-    machine : Machine
+    machine : MachineLimits
         For the defaults that are the machine's own values.
 
     Returns

@@ -1,62 +1,40 @@
-"""A reference "virtual machine": a time-stepping interpolator with one controller effect.
+"""The reference interpreter's run: a program through the time-stepping controller, with at
+most one controller effect switched on, to the trace a real controller would record.
 
-ncperf's ``diagnose`` compares a measured feed trace with ncperf's prediction and names the
-unmodelled effect behind the gap. To check it on traces whose effect is withheld, this
-controller produces traces with exactly one effect switched on at a given strength
-(:data:`~vm.effects.EFFECTS`).
-
-* Limits: the paper's models as ncperf's plugins evaluate them (:mod:`vm.limits`): junction
-  feeds, block caps, rapids at the axes' max feed along their direction. Corners are run as
-  model 1 says (sec. 2.1, Fig. 2b): on the arc of radius R (eq. 1) tangent to both blocks,
-  at most at the corner feed over its whole length; curvature jumps hold their feed over
-  the transition time dt (model 2). The path is cut into segments accordingly.
-* Motion: an independent jerk-limited planner stepped at the controller's cycle with full
-  (or ``lookahead_depth``) look-ahead (:mod:`vm.planner`); ``core.engine.profile`` is not used.
+* Limits: the paper's models, written here (:mod:`refvm.models`, :mod:`refvm.limits`).
+* Motion: a jerk-limited planner stepped at the controller's cycle with full (or
+  ``lookahead_depth``) look-ahead (:mod:`refvm.planner`).
 * Output: ``t, x, y, z, v, line`` every cycle from the first motion to rest at the end, the
   columns of the LinuxCNC traces of ``../shared/data/linuxcnc/suite``.
 
-As a module (``benchmarks/`` on sys.path)::
+::
 
-    from vm.virtual_machine import simulate, EFFECTS
-    trace = simulate("part.ngc", "linuxcnc-sim", effect="feed_override", params={"scale": 0.8})
+    from refvm import simulate
+    trace = simulate(toolpath, machine, effect="feed_override", params={"scale": 0.8})
 
-As a script::
-
-    python benchmarks/vm/virtual_machine.py PROGRAM OUT.csv [--machine PRESET|FILE]
-        [--effect NAME --param k=v ...] [--dt 0.001] [--kind setpoint|actual]
+``toolpath`` and ``machine`` are any objects with the columns of :class:`refvm.program.Program`
+and the attributes of :class:`refvm.machine.MachineLimits` (ncperf's ``ToolPath`` and
+``Machine`` have them); this package reads them and imports nothing of ncperf.
 """
 
 from __future__ import annotations
 
-import argparse
 import math
 import os
-import sys
-import time
-from collections.abc import Mapping, Sequence
+from collections.abc import Mapping
 from dataclasses import dataclass
 from pathlib import Path
-
-if __name__ == "__main__" and not __package__:
-    # Run as a script: make this folder's package (`vm`) and the repository's `core`
-    # importable, then import relatively as a module would (PEP 366).
-    _here = Path(__file__).resolve()
-    sys.path[:0] = [str(_here.parents[1]), str(_here.parents[2])]
-    __package__ = "vm"  # noqa: A001
-    import vm  # noqa: F401
 
 import numpy as np
 from numpy.typing import NDArray
 
-from core import Machine, Ncperf, ToolPath, resolve_machine
-from core.engine.profile import boundary_caps as _unused  # noqa: F401
-from core.model import geometry as g
+from refvm.effects import EFFECT_DOCS, EFFECTS, resolve_effect
+from refvm.limits import ControllerSetup, Segments, controller_setup
+from refvm.machine import MachineLimits
+from refvm.planner import Motion, plan_motion
+from refvm.program import Program
 
-from .effects import EFFECT_DOCS, EFFECTS, resolve_effect
-from .limits import ControllerSetup, Segments, controller_setup
-from .planner import Motion, plan_motion
-
-__all__ = ["EFFECTS", "EFFECT_DOCS", "Trace", "simulate", "write_csv", "main"]
+__all__ = ["EFFECTS", "EFFECT_DOCS", "Trace", "simulate", "write_csv"]
 
 #: Servo lag: the trace goes on after the setpoint stops until every axis is within this
 #: distance of it (mm): 1 um, a typical in-position window.
@@ -130,10 +108,9 @@ class Trace:
 
 
 def positions(
-    toolpath: ToolPath, segments: Segments, seg: NDArray[np.int64], d: NDArray[np.float64]
+    program: Program, segments: Segments, seg: NDArray[np.int64], d: NDArray[np.float64]
 ) -> NDArray:
     """(m, 3) points at distance ``d`` (mm) into segments ``seg``."""
-    tp = toolpath
     sg = segments
     out = np.empty((seg.size, 3))
     for lo in range(0, seg.size, CHUNK):  # bounded temporaries on hours-long traces
@@ -143,9 +120,7 @@ def positions(
         b = sg.blend[i]
         part = b < 0
         if part.any():
-            # On the program's own moves: the program's geometry (ncperf's, not its planner).
-            k = sg.move[i[part]]
-            p[part] = tp.points_along(k, np.clip(sg.offset[i[part]] + dd[part], 0.0, tp.length[k]))
+            p[part] = program.points(sg.move[i[part]], sg.offset[i[part]] + dd[part])
         if (~part).any():
             bb = b[~part]
             phi = (sg.phi0[i[~part]] + dd[~part] / sg.radius[bb])[:, None]
@@ -159,7 +134,7 @@ def _speed(p: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
     """|dp/dt| by central differences (one-sided at the ends)."""
     if p.shape[0] < 2:
         return np.zeros(p.shape[0])
-    return g.norm(np.gradient(p, dt, axis=0))
+    return np.linalg.norm(np.gradient(p, dt, axis=0), axis=1)
 
 
 def servo_lag(p: NDArray[np.float64], dt: float, tau: float) -> NDArray[np.float64]:
@@ -210,23 +185,20 @@ def moving_average(p: NDArray[np.float64], samples: int) -> NDArray[np.float64]:
 
 
 def simulate(
-    source: str | os.PathLike | ToolPath,
-    machine: Machine | str | None = None,
+    program: object,
+    machine: object,
     effect: str | None = None,
     params: Mapping[str, float] | None = None,
     *,
     dt: float = 0.001,
     kind: str | None = None,
-    ncperf: Ncperf | None = None,
 ) -> Trace:
-    """Run a program on the virtual machine with at most one effect.
+    """Run a program on the reference controller with at most one effect.
 
     Parameters
     ----------
-    source : path or ToolPath
-        A program any ncperf adapter reads, or a tool path.
-    machine : Machine, preset name, TOML path or None
-        None: ncperf's default preset.
+    program : Program, or a parsed tool path with its columns
+    machine : MachineLimits, or a machine with its attributes
     effect : str or None
         An :data:`EFFECTS` name.
     params : mapping of str to float, optional
@@ -236,14 +208,12 @@ def simulate(
     kind : {"setpoint", "actual"} or None
         What the positions are. None: "actual" with ``servo_lag``, else "setpoint".
         "actual" without ``servo_lag`` is the setpoint (a perfect servo).
-    ncperf : Ncperf, optional
-        The facade whose adapters and plugins are used (a fresh default one otherwise).
 
     Raises
     ------
     ValueError
-        Unknown effect or parameter, a value out of bounds, a bad dt or kind, or
-        ``servo_lag`` with kind "setpoint".
+        Unknown effect or parameter, a value out of bounds, a bad dt or kind, an empty
+        program, or ``servo_lag`` with kind "setpoint".
     """
     if not (isinstance(dt, int | float) and math.isfinite(dt) and dt > 0):
         raise ValueError(f"dt must be a positive number of seconds, got {dt!r}")
@@ -254,19 +224,18 @@ def simulate(
             raise ValueError("servo_lag records actual positions: kind 'setpoint' contradicts it")
         kind = "actual"
     kind = kind or "setpoint"
-    m = machine if isinstance(machine, Machine) else resolve_machine(machine)
+    m = MachineLimits.read(machine)
     p = resolve_effect(effect, params, m)
-    nc = ncperf if ncperf is not None else Ncperf()
-    tp = source if isinstance(source, ToolPath) else nc.extract(os.fspath(source))
-    if tp.n == 0:
-        raise ValueError(f"{tp.source}: no moves to run")
-    setup = controller_setup(tp, m, effect, p, nc)
+    prog = program if isinstance(program, Program) else Program.read(program)
+    if prog.n == 0:
+        raise ValueError(f"{prog.source}: no moves to run")
+    setup = controller_setup(prog, m, effect, p)
     motion: Motion = plan_motion(setup.limits, dt)
-    tp = setup.toolpath
+    prog = setup.program
     sg = setup.segments
     seg = motion.move
     seg_start = np.concatenate([[0.0], np.cumsum(setup.limits.length)[:-1]])
-    pts = positions(tp, sg, seg, motion.s - seg_start[seg])
+    pts = positions(prog, sg, seg, motion.s - seg_start[seg])
     v = motion.v
     s = motion.s
     if effect == "jerk_filter" and round(p["window"] / dt) > 1:
@@ -287,7 +256,7 @@ def simulate(
         y=pts[:, 1],
         z=pts[:, 2],
         v=v,
-        line=tp.line[move],
+        line=np.asarray(prog.line, dtype=np.int64)[move],
         s=s,
         move=move,
         segment=seg,
@@ -322,62 +291,3 @@ def write_csv(trace: Trace, path: str | os.PathLike) -> None:
     finally:
         if tmp.exists():
             tmp.unlink()
-
-
-def _param(text: str) -> tuple[str, float]:
-    key, sep, value = text.partition("=")
-    if not sep or not key:
-        raise argparse.ArgumentTypeError(f"--param takes k=v, got {text!r}")
-    try:
-        return key.strip(), float(value)
-    except ValueError:
-        raise argparse.ArgumentTypeError(f"--param {key}: not a number: {value!r}") from None
-
-
-def main(argv: Sequence[str] | None = None) -> int:
-    """The command line (see the module docstring); returns the exit status."""
-    ap = argparse.ArgumentParser(
-        prog="virtual_machine.py",
-        description="Reference time-stepping controller with one effect; writes t,x,y,z,v,line.",
-        epilog="effects: "
-        + "; ".join(f"{k}({', '.join(v) or 'no parameters'})" for k, v in EFFECTS.items()),
-    )
-    ap.add_argument("program")
-    ap.add_argument("out", help="CSV trace to write")
-    ap.add_argument("--machine", default=None, help="preset name or TOML file")
-    ap.add_argument("--effect", choices=sorted(EFFECTS), default=None)
-    ap.add_argument("--param", type=_param, action="append", default=[], metavar="K=V")
-    ap.add_argument("--dt", type=float, default=0.001, help="controller cycle, s")
-    ap.add_argument("--kind", choices=KINDS, default=None)
-    args = ap.parse_args(argv)
-    t0 = time.perf_counter()
-    try:
-        trace = simulate(
-            args.program,
-            args.machine,
-            args.effect,
-            dict(args.param),
-            dt=args.dt,
-            kind=args.kind,
-        )
-    except ValueError as exc:
-        print(f"virtual_machine.py: {exc}", file=sys.stderr)
-        return 2
-    wall = time.perf_counter() - t0
-    write_csv(trace, args.out)
-    print(
-        f"{args.program}: {trace.t.size} cycles, cycle time {trace.cycle_time:.3f} s, "
-        f"{trace.kind} trace, effect {trace.effect or 'none'} {trace.params or ''}, "
-        f"{wall:.2f} s wall -> {args.out}"
-    )
-    return 0
-
-
-if __name__ == "__main__":
-    from core.model.errors import NcperfError
-
-    try:
-        sys.exit(main())
-    except NcperfError as exc:
-        print(exc, file=sys.stderr)
-        sys.exit(1)

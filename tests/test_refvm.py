@@ -1,21 +1,22 @@
-"""The reference virtual machine (benchmarks/vm): motion, effects, and agreement with ncperf.
+"""The reference interpreter (refvm): motion, effects, agreement with ncperf, independence.
 
 Expected numbers are worked out by hand in each test; ncperf's own profile is used only in
-the cycle-time agreement test, as the thing compared.
+the cycle-time agreement test, as the thing compared. ncperf reads the programs (its
+adapters) and the machines; the interpreter imports nothing of it.
 """
 
 from __future__ import annotations
 
 import math
+import subprocess
+import sys
 
 import numpy as np
 import pytest
 
-from benchmarks.vm.effects import EFFECT_DOCS
-from benchmarks.vm.planner import stop_distance
-from benchmarks.vm.virtual_machine import EFFECTS, main, simulate
 from core import load_preset
 from core.engine.profile import build_profile
+from refvm import EFFECT_DOCS, EFFECTS, simulate, stop_distance
 from tests.conftest import ROOT, machine, path, shared
 
 INF = float("inf")
@@ -45,7 +46,7 @@ def test_single_line_is_an_almost_trapezoid(nc):
     # Each ramp: dv/A + A/J = 0.05 + 0.002 s over 100/2 * 0.052 = 2.6 mm; cruise 94.8 mm at
     # 100 mm/s = 0.948 s; total 1.052 s.
     m = machine(acc=(2.0,) * 3, jerk=(1000.0,) * 3)
-    tr = simulate(path([{"end": (100, 0, 0)}], feed=100.0), m, ncperf=nc)
+    tr = simulate(path([{"end": (100, 0, 0)}], feed=100.0), m)
     assert tr.cycle_time == pytest.approx(1.05, rel=0.01)
     assert tr.cycle_time == pytest.approx(1.052, abs=DT)
     assert tr.v[0] == 0.0 and tr.v[-1] == 0.0
@@ -58,7 +59,7 @@ def test_single_line_is_an_almost_trapezoid(nc):
 def test_no_chatter_at_the_cap(nc):
     """Between the ramps the speed is exactly F with zero acceleration, every cycle."""
     m = machine(acc=(2.0,) * 3, jerk=(1000.0,) * 3)
-    tr = simulate(path([{"end": (100, 0, 0)}], feed=100.0), m, ncperf=nc)
+    tr = simulate(path([{"end": (100, 0, 0)}], feed=100.0), m)
     cruise = plateau(tr, 2.7, 97.3)  # past the 2.6 mm ramps
     assert cruise.size > 900
     assert np.all(cruise == 100.0)
@@ -74,7 +75,7 @@ def test_positions_follow_arcs(nc):
         ],
         feed=100.0,
     )
-    tr = simulate(tp, lcnc(), ncperf=nc)
+    tr = simulate(tp, lcnc())
     on_arc = tr.move == 1
     r = np.hypot(tr.x[on_arc] - 10, tr.y[on_arc] - 2)
     assert on_arc.sum() > 50
@@ -91,7 +92,7 @@ def test_corner_minimum_speed_equals_the_junction_feed(nc):
     m = machine()
     tp = path(CORNER, feed=100.0)
     want = (5000 * R90**2) ** (1 / 3)
-    tr = simulate(tp, m, ncperf=nc)
+    tr = simulate(tp, m)
     ev = nc.evaluate(tp, m)
     assert ev.junction_feed[0] == pytest.approx(want, rel=1e-6)
     near = plateau(tr, 15, 25)
@@ -104,7 +105,7 @@ def test_corner_without_jerk_limit_is_passed_at_the_junction_feed(nc):
     the sampled minimum is at most A dt = 2 mm/s above it (documented behaviour)."""
     # sqrt(2000 * 0.0241421) = 6.948688
     want = math.sqrt(2000 * R90)
-    tr = simulate(path(CORNER, feed=100.0), lcnc(), ncperf=nc)
+    tr = simulate(path(CORNER, feed=100.0), lcnc())
     assert tr.boundary_speed[1] == pytest.approx(want, rel=1e-3)
     low = plateau(tr, 15, 25).min()
     assert want - 1e-6 <= low <= want + 2000 * DT
@@ -114,7 +115,7 @@ def test_acceleration_and_jerk_stay_within_the_limits(nc):
     """On the Fig. 1 polygons (840D preset) every cycle keeps |a| <= A and, away from stops,
     |da/dt| <= J of the moves involved."""
     m = load_preset("siemens-840d")
-    tr = simulate(ROOT / "examples" / "fig1_polygons_F4000.ngc", m, ncperf=nc)
+    tr = simulate(nc.extract(str(ROOT / "examples" / "fig1_polygons_F4000.ngc")), m)
     lim = tr.setup.limits  # per segment (moves, and the arcs inserted at corners)
     a = np.diff(tr.v) / DT
     mv = tr.segment
@@ -132,7 +133,7 @@ def test_dwell_and_exact_stop(nc, tmp_path):
     """G4 P0.25 rests 0.25 s at the end of its line; G61 blocks end at rest."""
     prog = tmp_path / "stops.ngc"
     prog.write_text("G21 G90 G17 G94 G64\nG1 X10 F3000\nG4 P0.25\nG1 Y10\nG61\nG1 X0\nG1 Y0\nM2\n")
-    tr = simulate(prog, lcnc(), ncperf=nc)
+    tr = simulate(nc.extract(str(prog)), lcnc())
     # moves: X10 (line 2), Y10 (4), X0 (6, G61), Y0 (7, G61)
     corner = pytest.approx(math.sqrt(2000 * R90), rel=1e-4)
     assert tr.boundary_speed.tolist() == [0.0, 0.0, corner, 0.0, 0.0]
@@ -159,7 +160,7 @@ def test_stop_distance_closed_forms():
 def test_feed_override_scales_the_plateau(nc):
     """feed_override 0.8: the plateau of a 100 mm line at F6000 is 80 mm/s."""
     tp = path([{"end": (100, 0, 0)}], feed=100.0)
-    tr = simulate(tp, lcnc(), "feed_override", {"scale": 0.8}, ncperf=nc)
+    tr = simulate(tp, lcnc(), "feed_override", {"scale": 0.8})
     assert plateau(tr, 10, 90) == pytest.approx(80.0)
 
 
@@ -168,8 +169,8 @@ def test_block_cycle_time_doubled_halves_the_short_block_plateau(nc):
     moves = [{"end": (i + 1, 0, 0)} for i in range(60)] + [{"end": (90, 0, 0)}]
     tp = path(moves, feed=10000 / 60)
     m = machine()
-    base = simulate(tp, m, ncperf=nc)
-    slow = simulate(tp, m, "block_cycle_time", {"t_block": 0.024}, ncperf=nc)
+    base = simulate(tp, m)
+    slow = simulate(tp, m, "block_cycle_time", {"t_block": 0.024})
     assert np.median(plateau(base, 20, 50)) == pytest.approx(1 / 0.012)
     assert np.median(plateau(slow, 20, 50)) == pytest.approx(1 / 0.024)
     assert slow.cycle_time > base.cycle_time
@@ -180,8 +181,8 @@ def test_lookahead_depth_one_caps_collinear_blocks(nc):
     by sqrt(2 A l) = 44.72 mm/s (peaks sqrt(3 A l) = 54.77 mid-block); 20 blocks see 10 mm
     (sqrt(2 A 10) = 200 > F): full feed."""
     tp = path([{"end": (0.5 * (i + 1), 0, 0)} for i in range(100)], feed=100.0)
-    one = simulate(tp, lcnc(), "lookahead_depth", {"blocks": 1}, ncperf=nc)
-    full = simulate(tp, lcnc(), "lookahead_depth", {}, ncperf=nc)
+    one = simulate(tp, lcnc(), "lookahead_depth", {"blocks": 1})
+    full = simulate(tp, lcnc(), "lookahead_depth", {})
     assert one.boundary_speed[20:80].max() == pytest.approx(math.sqrt(2 * 2000 * 0.5), rel=1e-3)
     assert plateau(one, 10, 40).max() <= math.sqrt(3 * 2000 * 0.5) * (1 + 1e-3)
     assert plateau(full, 10, 40) == pytest.approx(100.0)
@@ -191,7 +192,7 @@ def test_lookahead_depth_one_caps_collinear_blocks(nc):
 def test_corner_tolerance_scales_the_corner_radius(nc):
     """TIT 0.04 instead of 0.01: R x 4, so sqrt(A R) doubles: 13.897 mm/s."""
     tp = path(CORNER, feed=100.0)
-    tr = simulate(tp, lcnc(), "corner_tolerance", {"tolerance": 0.04}, ncperf=nc)
+    tr = simulate(tp, lcnc(), "corner_tolerance", {"tolerance": 0.04})
     assert tr.boundary_speed[1] == pytest.approx(2 * math.sqrt(2000 * R90), rel=1e-3)
 
 
@@ -199,11 +200,11 @@ def test_normal_acceleration_factor_only_slows_corners(nc):
     """factor 0.5: the corner is passed at sqrt(0.5 A R) = 4.9135 mm/s; a straight line keeps
     the full tangential acceleration (same time)."""
     tp = path(CORNER, feed=100.0)
-    tr = simulate(tp, lcnc(), "normal_acceleration_factor", {"factor": 0.5}, ncperf=nc)
+    tr = simulate(tp, lcnc(), "normal_acceleration_factor", {"factor": 0.5})
     assert tr.boundary_speed[1] == pytest.approx(math.sqrt(0.5 * 2000 * R90), rel=1e-3)
     line = path([{"end": (100, 0, 0)}], feed=100.0)
-    a = simulate(line, lcnc(), ncperf=nc)
-    b = simulate(line, lcnc(), "normal_acceleration_factor", {"factor": 0.5}, ncperf=nc)
+    a = simulate(line, lcnc())
+    b = simulate(line, lcnc(), "normal_acceleration_factor", {"factor": 0.5})
     assert b.cycle_time == a.cycle_time
 
 
@@ -217,7 +218,7 @@ def test_normal_acceleration_factor_caps_programmed_arcs(nc):
         ],
         feed=100.0,
     )
-    tr = simulate(tp, lcnc(), "normal_acceleration_factor", {"factor": 0.5}, ncperf=nc)
+    tr = simulate(tp, lcnc(), "normal_acceleration_factor", {"factor": 0.5})
     assert plateau(tr, 10.5, 10 + 2 * math.pi - 0.5) == pytest.approx(math.sqrt(0.5 * 2000 * 2))
 
 
@@ -225,8 +226,8 @@ def test_corner_tolerance_replaces_the_program_tolerance(nc, tmp_path):
     """With G64 P0.01 in the program, tolerance 0.04 still gives R x 4: 13.897 mm/s."""
     prog = tmp_path / "corner.ngc"
     prog.write_text("G21 G90 G17 G94 G64 P0.01\nG1 X20 F6000\nG1 Y20\nM2\n")
-    base = simulate(prog, lcnc(), ncperf=nc)
-    tr = simulate(prog, lcnc(), "corner_tolerance", {"tolerance": 0.04}, ncperf=nc)
+    base = simulate(nc.extract(str(prog)), lcnc())
+    tr = simulate(nc.extract(str(prog)), lcnc(), "corner_tolerance", {"tolerance": 0.04})
     assert base.boundary_speed[1] == pytest.approx(math.sqrt(2000 * R90), rel=1e-3)
     assert tr.boundary_speed[1] == pytest.approx(2 * math.sqrt(2000 * R90), rel=1e-3)
 
@@ -235,7 +236,7 @@ def test_corner_is_cut_by_the_inserted_arc(nc):
     """At a 90 deg corner the path runs on the arc of eq. (1): it passes TIT = 0.01 mm inside
     the corner point, at the junction feed over the arc's length R pi / 2."""
     m = machine()
-    tr = simulate(path(CORNER, feed=100.0), m, ncperf=nc)
+    tr = simulate(path(CORNER, feed=100.0), m)
     gap = np.hypot(tr.x - 20, tr.y).min()
     # the arc's middle is R / cos45 - R = 0.01 mm from the corner (the samples miss it by at
     # most half a cycle at 1.43 mm/s, under 1 um)
@@ -257,8 +258,8 @@ def test_arc_feed_limit_caps_programmed_arcs(nc):
         ],
         feed=100.0,
     )
-    base = simulate(tp, lcnc(), ncperf=nc)
-    capped = simulate(tp, lcnc(), "arc_feed_limit", ncperf=nc)
+    base = simulate(tp, lcnc())
+    capped = simulate(tp, lcnc(), "arc_feed_limit")
     arc = (capped.s > 10.5) & (capped.s < 10 + 2 * math.pi - 0.5)
     assert capped.v[arc] == pytest.approx(math.sqrt(2000 * 2))
     assert plateau(base, 10.5, 10 + 2 * math.pi - 0.5) == pytest.approx(100.0)
@@ -267,7 +268,7 @@ def test_arc_feed_limit_caps_programmed_arcs(nc):
 def test_axis_dynamics_scales_the_ramps(nc):
     """accel_scale 2 on 100 mm at F6000 without jerk limit: T = L/F + F/(2A) = 1.025 s."""
     tp = path([{"end": (100, 0, 0)}], feed=100.0)
-    tr = simulate(tp, lcnc(), "axis_dynamics", {"accel_scale": 2.0}, ncperf=nc)
+    tr = simulate(tp, lcnc(), "axis_dynamics", {"accel_scale": 2.0})
     assert tr.cycle_time == pytest.approx(1.025, abs=DT)
 
 
@@ -277,8 +278,8 @@ def test_axis_dynamics_feed_scale_caps_axis_speed_not_path_speed(nc):
     c, s = math.cos(math.pi / 6), math.sin(math.pi / 6)
     along = path([{"end": (100, 0, 0)}], feed=100.0)
     slant = path([{"end": (100 * c, 100 * s, 0)}], feed=100.0)
-    tr_a = simulate(along, lcnc(), "axis_dynamics", {"feed_scale": 0.2}, ncperf=nc)
-    tr_s = simulate(slant, lcnc(), "axis_dynamics", {"feed_scale": 0.2}, ncperf=nc)
+    tr_a = simulate(along, lcnc(), "axis_dynamics", {"feed_scale": 0.2})
+    tr_s = simulate(slant, lcnc(), "axis_dynamics", {"feed_scale": 0.2})
     assert np.max(tr_a.v) == pytest.approx(50.0, rel=1e-6)
     assert np.median(plateau(tr_s, 20, 80)) == pytest.approx(50.0 / c, rel=1e-6)
 
@@ -287,8 +288,8 @@ def test_servo_lag_positions_lag_by_v_tau(nc):
     """tau 20 ms at 100 mm/s on a straight line: the actual position is v tau = 2 mm behind the
     setpoint; its speed is still 100 mm/s; the trace is actual and longer."""
     tp = path([{"end": (100, 0, 0)}], feed=100.0)
-    setpoint = simulate(tp, lcnc(), ncperf=nc)
-    actual = simulate(tp, lcnc(), "servo_lag", {"tau": 0.02}, ncperf=nc)
+    setpoint = simulate(tp, lcnc())
+    actual = simulate(tp, lcnc(), "servo_lag", {"tau": 0.02})
     assert actual.kind == "actual"
     k = 500  # t = 0.5 s, mid-plateau (ramps end at 0.05 s, the lag settles in ~5 tau)
     assert setpoint.x[k] - actual.x[k] == pytest.approx(2.0, rel=1e-3)
@@ -296,15 +297,15 @@ def test_servo_lag_positions_lag_by_v_tau(nc):
     assert actual.cycle_time > setpoint.cycle_time
     assert actual.x[-1] == pytest.approx(100.0, abs=1e-3)
     with pytest.raises(ValueError, match="servo_lag"):
-        simulate(tp, lcnc(), "servo_lag", {"tau": 0.02}, kind="setpoint", ncperf=nc)
+        simulate(tp, lcnc(), "servo_lag", {"tau": 0.02}, kind="setpoint")
 
 
 def test_jerk_filter_smooths_and_delays(nc):
     """window 50 ms: the trace is 49 cycles longer, the plateau is unchanged, and 10 ms in the
     smoothed speed is far below the unfiltered A t = 20 mm/s."""
     tp = path([{"end": (100, 0, 0)}], feed=100.0)
-    base = simulate(tp, lcnc(), ncperf=nc)
-    tr = simulate(tp, lcnc(), "jerk_filter", {"window": 0.05}, ncperf=nc)
+    base = simulate(tp, lcnc())
+    tr = simulate(tp, lcnc(), "jerk_filter", {"window": 0.05})
     assert tr.t.size == base.t.size + 49
     assert tr.v[500] == pytest.approx(100.0)
     assert base.v[10] == pytest.approx(20.0)
@@ -318,7 +319,7 @@ def test_path_compression_lifts_block_time_and_chord_corners(nc):
     reach F = 166.7 mm/s; 1 mm chords turning 2.9 deg lose their corner limits."""
     moves = [{"end": (i + 1, 0, 0)} for i in range(60)] + [{"end": (90, 0, 0)}]
     tp = path(moves, feed=10000 / 60)
-    tr = simulate(tp, machine(), "path_compression", {}, ncperf=nc)
+    tr = simulate(tp, machine(), "path_compression", {})
     assert plateau(tr, 20, 58).max() == pytest.approx(10000 / 60)
     # 1 mm chords of a circle R 12.7 mm turn by b = 2 asin(0.5 / 12.7) = 4.512 deg < 5 deg;
     # eq. (1): R = min(0.01 cos(b/2) / (1 - cos(b/2)), l / (2 sin(b/2)) - 0.01)
@@ -328,8 +329,8 @@ def test_path_compression_lifts_block_time_and_chord_corners(nc):
     r_corner = min(0.01 * math.cos(ang / 2) / (1 - math.cos(ang / 2)), 12.7 - 0.01)
     pts = [(12.7 * math.sin(k * ang), 12.7 - 12.7 * math.cos(k * ang), 0.0) for k in range(1, 40)]
     chords = path([{"end": p} for p in pts], feed=200.0)
-    base = simulate(chords, lcnc(), ncperf=nc)
-    merged = simulate(chords, lcnc(), "path_compression", {}, ncperf=nc)
+    base = simulate(chords, lcnc())
+    merged = simulate(chords, lcnc(), "path_compression", {})
     inner = slice(10, 30)
     assert base.boundary_speed[inner].min() == pytest.approx(math.sqrt(2000 * r_corner), rel=1e-3)
     assert base.boundary_speed[inner].max() < 190.0
@@ -353,7 +354,7 @@ def test_path_compression_lifts_block_time_and_chord_corners(nc):
 def test_bad_effect_requests_raise(nc, effect, params, match):
     """Unknown effects and parameters, and values out of bounds, raise ValueError."""
     with pytest.raises(ValueError, match=match):
-        simulate(path(CORNER, feed=100.0), lcnc(), effect, params, ncperf=nc)
+        simulate(path(CORNER, feed=100.0), lcnc(), effect, params)
 
 
 def test_effects_table_is_consistent():
@@ -377,22 +378,59 @@ def test_cycle_time_agrees_with_ncperf(nc, program, preset):
     """Without effect the virtual machine's cycle time is ncperf's predicted one within 2 %."""
     m = load_preset(preset)
     tp = nc.extract(str(ROOT / "examples" / f"{program}.ngc"))
-    tr = simulate(tp, m, ncperf=nc)
+    tr = simulate(tp, m)
     predicted = build_profile(nc.evaluate(tp, m)).cycle_time
     assert tr.cycle_time == pytest.approx(predicted, rel=0.02)
 
 
 def test_command_line_writes_a_linuxcnc_style_trace(tmp_path):
-    """The script writes t,x,y,z,v,line, the first columns of the LinuxCNC suite traces."""
+    """benchmarks/vm_trace.py writes t,x,y,z,v,line, the first columns of the LinuxCNC suite
+    traces; an effect value out of bounds is exit 2."""
     out = tmp_path / "trace.csv"
     prog = ROOT / "examples" / "fig4_points_d1.ngc"
-    args = [str(prog), str(out), "--machine", "linuxcnc-sim", "--effect", "feed_override"]
-    assert main([*args, "--param", "scale=0.9"]) == 0
+    script = ROOT / "benchmarks" / "vm_trace.py"
+    args = [sys.executable, str(script), str(prog), str(out), "--machine", "linuxcnc-sim"]
+    args += ["--effect", "feed_override"]
+    done = subprocess.run([*args, "--param", "scale=0.9"], capture_output=True, text=True)
+    assert done.returncode == 0, done.stderr
     lines = out.read_text().splitlines()
     assert lines[0] == "t,x,y,z,v,line"
     first = lines[1].split(",")
     assert float(first[0]) == 0.0 and float(first[4]) == 0.0
-    assert main([*args, "--param", "scale=3"]) == 2
+    bad = subprocess.run([*args, "--param", "scale=3"], capture_output=True, text=True)
+    assert bad.returncode == 2 and "outside" in bad.stderr
     suite = shared("data", "linuxcnc", "suite", "01_polygons_f2000.csv")
     with open(suite) as fh:
         assert fh.readline().startswith(lines[0] + ",")
+
+
+# ----------------------------------------------------------------------------- independence
+CHECKED = ("core", "adapters", "plugins")
+
+
+def test_refvm_imports_nothing_it_checks():
+    """No module of refvm imports core, adapters or plugins, by its source (every import
+    statement, also inside functions) or at run time (a fresh interpreter importing every
+    refvm module has none of them loaded)."""
+    import ast
+
+    offenders = []
+    for src in sorted((ROOT / "refvm").glob("*.py")):
+        for node in ast.walk(ast.parse(src.read_text(), str(src))):
+            names = []
+            if isinstance(node, ast.Import):
+                names = [a.name for a in node.names]
+            elif isinstance(node, ast.ImportFrom) and node.level == 0 and node.module:
+                names = [node.module]
+            offenders += [f"{src.name}: {n}" for n in names if n.split(".")[0] in CHECKED]
+    assert offenders == []
+    code = (
+        "import importlib, pkgutil, sys, refvm\n"
+        "for m in pkgutil.iter_modules(refvm.__path__):\n"
+        "    importlib.import_module('refvm.' + m.name)\n"
+        f"print(sorted(k for k in sys.modules if k.split('.')[0] in {CHECKED!r}))"
+    )
+    done = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
+    )
+    assert done.stdout.strip() == "[]"

@@ -1,10 +1,11 @@
-"""The virtual machine without effect against ncperf's predicted cycle time, and its speed.
+"""The reference interpreter (refvm) without effect against ncperf's predicted cycle time.
 
-Not a test: ``PYTHONPATH=.:benchmarks python benchmarks/vm/agreement.py [--all]`` from the
-repository root. Prints, for the example programs on the ``linuxcnc-sim`` and
-``siemens-840d`` presets, the virtual machine's cycle time (1 ms cycles), ncperf's
-(``core.engine.profile``), their difference, and the virtual machine's cycles per second of wall
-time. ``--all`` adds every example and the programs of ../shared/data/linuxcnc/suite.
+Not a test: ``python benchmarks/vm_agreement.py [--all]`` from the repository root (ncperf
+installed with the test set-up command); the one place where the two sides meet. Prints,
+for the example programs on the ``linuxcnc-sim`` and ``siemens-840d`` presets, the
+interpreter's cycle time (1 ms cycles), ncperf's (``core.engine.profile``), their
+difference, and the interpreter's cycles per second of wall time. ``--all`` adds every
+example and the programs of ../shared/data/linuxcnc/suite.
 """
 
 from __future__ import annotations
@@ -16,9 +17,9 @@ from pathlib import Path
 
 from core import Ncperf, load_preset
 from core.engine.profile import build_profile
-from vm.virtual_machine import simulate
+from refvm import simulate
 
-ROOT = Path(__file__).resolve().parents[2]
+ROOT = Path(__file__).resolve().parents[1]
 PROGRAMS = ("fig1_polygons_F4000", "fig3_semicircle_spiral", "fig4_points_d1", "zlevel_cavity")
 PRESETS = ("linuxcnc-sim", "siemens-840d")
 
@@ -42,7 +43,7 @@ def main(argv: list[str] | None = None) -> int:
         for preset in PRESETS:
             m = load_preset(preset)
             t0 = time.perf_counter()
-            tr = simulate(tp, m, ncperf=nc)
+            tr = simulate(tp, m)
             wall = time.perf_counter() - t0
             predicted = build_profile(nc.evaluate(tp, m)).cycle_time
             diff = tr.cycle_time / predicted - 1.0
