@@ -3,8 +3,7 @@
 Not a test: from the repository root (package installed) run
 ``python benchmarks/bench_svg.py [moves]`` and read the table. Two paths of ``moves``
 moves each (1,000,000 by default), both Archimedean spirals with 0.5 mm step-over and every
-97th move
-an arc bulging off the spiral:
+97th move an arc bulging off the spiral:
 
 * ``uniform``: 0.05 mm segments at 6 m/min (every block shorter than
   L = F t_int, so one reduction class almost everywhere: long runs);

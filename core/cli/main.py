@@ -12,12 +12,13 @@ import sys
 from importlib import resources
 from pathlib import Path
 
-from core import __version__
+from core._version import __version__
 from core.cli.compare import ranked
 from core.cli.compare import row as compare_row
 from core.cli.compare import table as compare_table
 from core.cli.output import atomic_writer
 from core.cli.report import fmt_time, summary, write_json, write_samples
+from core.engine.profile import SAMPLE_DT
 from core.facade import Ncperf
 from core.model.errors import InputError, NcperfError, UsageError
 from core.model.machine import DEFAULT_PRESET, load_preset, preset_names, resolve_machine
@@ -63,7 +64,9 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         required=True,
         help="write t,x,y,z,v,line (s, mm, mm/s, 1-based line) every --dt",
     )
-    pr.add_argument("--dt", type=float, default=0.001, help="time step in s (default 0.001)")
+    pr.add_argument(
+        "--dt", type=float, default=SAMPLE_DT, help=f"time step in s (default {SAMPLE_DT:g})"
+    )
 
     c = sub.add_parser("compare", help="rank machining strategies by predicted cycle time")
     c.set_defaults(run=cmd_compare)

@@ -62,6 +62,10 @@ from core.model.toolpath import PathMode, ToolPath
 JERK_ROUNDS = 12
 JERK_CONVERGED = 1e-4
 
+#: Default time step (s) of a sampled profile: 1 ms, the servo cycle of the traces it is
+#: compared with (LinuxCNC, the reference interpreter).
+SAMPLE_DT = 0.001
+
 
 def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
     """A_eff = dv / T of S-curve speed changes (mm/s^2).
@@ -316,7 +320,7 @@ class Profile:
             v[sel] = lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
         return v
 
-    def sample(self, dt: float = 0.001) -> Samples:
+    def sample(self, dt: float = SAMPLE_DT) -> Samples:
         """The profile every ``dt`` seconds from 0 to the cycle time (both ends included)."""
         if not dt > 0:
             raise ValueError(f"dt must be positive, got {dt}")
