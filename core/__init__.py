@@ -19,7 +19,7 @@ _EXPORTS: dict[str, str] = {
     "build_annotations": "core.view.annotations",
     "Analysis": "core.view.analysis",
     "ComparisonTarget": "core.view.targets",
-    "DiagnosisTarget": "core.view.targets",
+    "DiagnosisTarget": "core.diagnosis.diagnose",
     "FileTarget": "core.view.targets",
     "Zone": "core.view.zones",
     "InputError": "core.model.errors",
@@ -52,6 +52,7 @@ _EXPORTS: dict[str, str] = {
 }
 
 if TYPE_CHECKING:
+    from core.diagnosis.diagnose import DiagnosisTarget
     from core.engine.effects import Effect, Param, Setup
     from core.engine.indicators import Evaluation, Indicator, combine, min_block_length
     from core.facade import Ncperf
@@ -69,7 +70,7 @@ if TYPE_CHECKING:
     from core.plugins import BUILTIN_PLUGINS, make_plugin_manager
     from core.view.analysis import Analysis
     from core.view.annotations import Annotations, build_annotations
-    from core.view.targets import ComparisonTarget, DiagnosisTarget, FileTarget
+    from core.view.targets import ComparisonTarget, FileTarget
     from core.view.zones import Zone
 
 

@@ -6,6 +6,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -14,7 +15,18 @@ from refvm import vec as V
 Axes = tuple[float, float, float]
 
 
-def _axes(x: object) -> Axes:
+class MachineAttributes(Protocol):
+    """What :meth:`MachineLimits.read` reads (ncperf's ``Machine`` has these, in mm and s)."""
+
+    max_feed: Any  # (3,) mm/s
+    max_acceleration: Any  # (3,) mm/s^2
+    max_jerk: Any  # (3,) mm/s^3
+    interpolation_time: float
+    path_tolerance: float
+    curvature_transition_time: float
+
+
+def _axes(x: Any) -> Axes:
     a = [float(v) for v in np.asarray(x, dtype=np.float64).reshape(-1).tolist()]
     if len(a) != 3:
         raise ValueError(f"expected three axis values (X, Y, Z), got {len(a)}")
@@ -44,7 +56,7 @@ class MachineLimits:
     normal_acceleration_factor: float = 1.0
 
     @classmethod
-    def read(cls, machine: object) -> MachineLimits:
+    def read(cls, machine: MachineAttributes | MachineLimits) -> MachineLimits:
         if isinstance(machine, MachineLimits):
             return machine
         m = machine
@@ -59,15 +71,18 @@ class MachineLimits:
             normal_acceleration_factor=float(getattr(m, "normal_acceleration_factor", 1.0)),
         )
 
-    def replace(self, **changes: object) -> MachineLimits:
+    def replace(self, **changes: Any) -> MachineLimits:
         return dataclasses.replace(self, **changes)
 
     def scaled(self, accel: float = 1.0, jerk: float = 1.0, feed: float = 1.0) -> MachineLimits:
         """Every axis's limits multiplied (an infinite jerk stays infinite)."""
+        ax, ay, az = self.max_acceleration
+        jx, jy, jz = self.max_jerk
+        fx, fy, fz = self.max_feed
         return self.replace(
-            max_acceleration=tuple(a * accel for a in self.max_acceleration),
-            max_jerk=tuple(j * jerk for j in self.max_jerk),
-            max_feed=tuple(f * feed for f in self.max_feed),
+            max_acceleration=(ax * accel, ay * accel, az * accel),
+            max_jerk=(jx * jerk, jy * jerk, jz * jerk),
+            max_feed=(fx * feed, fy * feed, fz * feed),
         )
 
     def per_share(self, limits: Axes, share: V.Vec) -> float:

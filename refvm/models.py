@@ -83,7 +83,7 @@ def _perpendicular_towards(t1: V.Vec, t2: V.Vec) -> V.Vec:
     if V.length(u) < 1e-12:
         # t2 = -t1: pick the axis t1 has least of, then make it perpendicular
         k = min(range(3), key=lambda i: abs(t1[i]))
-        e = tuple(1.0 if i == k else 0.0 for i in range(3))
+        e: V.Vec = (1.0 if k == 0 else 0.0, 1.0 if k == 1 else 0.0, 1.0 if k == 2 else 0.0)
         u = V.cross(t1, e)
     return V.unit(u)
 

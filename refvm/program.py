@@ -20,6 +20,7 @@ from __future__ import annotations
 import math
 from dataclasses import dataclass
 from functools import cached_property
+from typing import Any, Protocol
 
 import numpy as np
 
@@ -30,7 +31,32 @@ RAPID, LINE, ARC_CW, ARC_CCW = 0, 1, 2, 3
 EXACT_STOP = 1
 
 
-def _rows(a: object) -> list[V.Vec]:
+class ToolPathColumns(Protocol):
+    """What :meth:`Program.read` reads: the columns of a parsed program (n moves)."""
+
+    kind: Any  # (n,) int
+    start: Any  # (n, 3) mm
+    end: Any  # (n, 3) mm
+    center: Any  # (n, 3) mm, NaN for lines
+    normal: Any  # (n, 3), NaN for lines
+    sweep: Any  # (n,) rad, NaN for lines
+    feed: Any  # (n,) mm/s, NaN for rapids
+    line: Any  # (n,) 1-based source line
+    path_mode: Any  # (n,) int, EXACT_STOP where the move ends at rest
+    dwell: Any  # (n,) s
+    tolerance: Any  # (n,) mm, NaN: the machine's
+    op_offsets: Any  # (k + 1,) moves op_offsets[i]:op_offsets[i+1] form operation i
+
+
+def _floats(a: Any) -> list[float]:
+    return [float(x) for x in np.asarray(a, dtype=np.float64).tolist()]
+
+
+def _ints(a: Any) -> list[int]:
+    return [int(x) for x in np.asarray(a).tolist()]
+
+
+def _rows(a: Any) -> list[V.Vec]:
     arr = np.asarray(a, dtype=np.float64)
     return [(float(x), float(y), float(z)) for x, y, z in arr.tolist()]
 
@@ -87,33 +113,33 @@ class Program:
         return self.kind[i] in (ARC_CW, ARC_CCW)
 
     @classmethod
-    def read(cls, toolpath: object) -> Program:
+    def read(cls, toolpath: ToolPathColumns) -> Program:
         """The program of a parsed tool path (any object with the columns of the module
         docstring and ``op_offsets``)."""
         tp = toolpath
-        kind = [int(k) for k in np.asarray(tp.kind).tolist()]
+        kind = _ints(tp.kind)
         n = len(kind)
-        offs = [int(x) for x in np.asarray(tp.op_offsets).tolist()]
+        offs = _ints(tp.op_offsets)
         operation = [0] * n
         for op in range(len(offs) - 1):
             for i in range(offs[op], offs[op + 1]):
                 operation[i] = op
-        cols = {
+        cols: dict[str, Any] = {
             "kind": kind,
             "start": _rows(tp.start),
             "end": _rows(tp.end),
             "center": _rows(tp.center),
             "normal": _rows(tp.normal),
-            "sweep": [float(x) for x in np.asarray(tp.sweep, dtype=float).tolist()],
-            "feed": [float(x) for x in np.asarray(tp.feed, dtype=float).tolist()],
-            "line": [int(x) for x in np.asarray(tp.line).tolist()],
-            "path_mode": [int(x) for x in np.asarray(tp.path_mode).tolist()],
-            "dwell": [float(x) for x in np.asarray(tp.dwell, dtype=float).tolist()],
-            "tolerance": [float(x) for x in np.asarray(tp.tolerance, dtype=float).tolist()],
+            "sweep": _floats(tp.sweep),
+            "feed": _floats(tp.feed),
+            "line": _ints(tp.line),
+            "path_mode": _ints(tp.path_mode),
+            "dwell": _floats(tp.dwell),
+            "tolerance": _floats(tp.tolerance),
             "operation": operation,
             "source": str(getattr(tp, "source", "<program>")),
         }
-        derived: dict[str, list] = {
+        derived: dict[str, Any] = {
             k: [] for k in ("length", "t_start", "t_end", "k_start", "k_end", "share")
         }
         derived["radius"] = []
@@ -190,7 +216,7 @@ def _in_plane(r: V.Vec, n: V.Vec) -> V.Vec:
     return V.sub(r, V.mul(n, V.dot(r, n)))
 
 
-def _geometry(kind: int, s: V.Vec, e: V.Vec, c: V.Vec, n: V.Vec, sweep: float) -> dict:
+def _geometry(kind: int, s: V.Vec, e: V.Vec, c: V.Vec, n: V.Vec, sweep: float) -> dict[str, Any]:
     if kind not in (ARC_CW, ARC_CCW):
         chord = V.sub(e, s)
         t = V.unit(chord)
@@ -224,7 +250,7 @@ def _geometry(kind: int, s: V.Vec, e: V.Vec, c: V.Vec, n: V.Vec, sweep: float) -
     # plus the helix's constant rise share |n_k| c / h -- an upper bound, at most 1.
     u0 = V.unit(V.mul(V.cross(n, r0), turn))
     u90 = V.mul(V.cross(n, u0), turn)
-    share = tuple(
+    sx, sy, sz = (
         min(V.peak_of_turning(u0[k], u90[k], sweep) * radius / h + abs(n[k]) * abs(pitch) / h, 1.0)
         for k in range(3)
     )
@@ -234,7 +260,7 @@ def _geometry(kind: int, s: V.Vec, e: V.Vec, c: V.Vec, n: V.Vec, sweep: float) -
         "t_end": tangent(r1),
         "k_start": curvature(r0),
         "k_end": curvature(r1),
-        "share": share,
+        "share": (sx, sy, sz),
         "radius": radius,
         "pitch": pitch,
     }

@@ -30,9 +30,9 @@ from numpy.typing import NDArray
 
 from refvm.effects import EFFECT_DOCS, EFFECTS, resolve_effect
 from refvm.limits import ControllerSetup, Segments, controller_setup
-from refvm.machine import MachineLimits
+from refvm.machine import MachineAttributes, MachineLimits
 from refvm.planner import Motion, plan_motion
-from refvm.program import Program
+from refvm.program import Program, ToolPathColumns
 
 __all__ = ["EFFECTS", "EFFECT_DOCS", "Trace", "simulate", "write_csv"]
 
@@ -185,8 +185,8 @@ def moving_average(p: NDArray[np.float64], samples: int) -> NDArray[np.float64]:
 
 
 def simulate(
-    program: object,
-    machine: object,
+    program: Program | ToolPathColumns,
+    machine: MachineLimits | MachineAttributes,
     effect: str | None = None,
     params: Mapping[str, float] | None = None,
     *,
@@ -249,7 +249,7 @@ def simulate(
     if effect in ("jerk_filter", "servo_lag"):
         v = _speed(pts, dt)
     move = sg.move[seg]
-    t = np.arange(pts.shape[0]) * dt
+    t = np.arange(pts.shape[0], dtype=np.float64) * dt
     return Trace(
         t=t,
         x=pts[:, 0],

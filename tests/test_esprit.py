@@ -516,3 +516,17 @@ def test_setup_script_is_idempotent():
     out = subprocess.run(["bash", str(script)], check=True, capture_output=True, text=True)
     assert (out.stdout, out.stderr) == ("", "")
     assert dll.stat().st_mtime_ns == before
+
+
+def test_twin_enums_are_the_object_model_tables():
+    """The Python twin's enums (spelled out for the type checker) hold exactly the names and
+    values of object_model's tables, so the two cannot drift apart."""
+    from adapters.esprit_com import object_model as om
+    from adapters.esprit_com import twin
+
+    for enum, table in (
+        (twin.espToolPathItemType, om.ITEM_TYPES),
+        (twin.espGraphicObjectType, om.GRAPHIC_OBJECT_TYPES),
+        (twin.espUnitType, om.UNIT_TYPES),
+    ):
+        assert {m.name: int(m.value) for m in enum} == dict(table)

@@ -274,8 +274,10 @@ class Reader:
         if rapid:
             self.rapid_moves.append(self.n)
         j = len(self.sp_xyz)
-        self.sp_xyz.append(tuple(float(v) for v in xyz))
-        self.sp_ijk.append(tuple(ijk) if ijk is not None else (np.nan, np.nan, np.nan))
+        self.sp_xyz.append((float(xyz[0]), float(xyz[1]), float(xyz[2])))
+        self.sp_ijk.append(
+            (float(ijk[0]), float(ijk[1]), float(ijk[2])) if ijk is not None else (np.nan,) * 3
+        )
         self.slow_axis_given |= ijk is not None
         self.sp_line.append(rec.line)
         self._chunk(_SLOW, j, j + 1, 1.0)

@@ -177,6 +177,7 @@ def scan_gotos(src: Source) -> FastGotos:
         k = _first_unparsable(vb, lf)
         lines, count = lines[:k], count[:k]
         vals = _parse(vb[: int(lf[k - 1]) + 1]) if k else np.zeros(0)
+        assert vals is not None  # the lines before the first unparsable one parse
     offset = np.cumsum(count) - count
     finite = np.isfinite(vals)
     if not finite.all():

@@ -12,6 +12,7 @@ import os
 from adapters.esprit_com.clr_host import as_host
 from adapters.esprit_com.command import analyze_and_draw
 from adapters.esprit_com.extract import EspritSource
+from adapters.esprit_com.object_model import ComObject
 from core.cli.report import summary
 from core.facade import Ncperf
 from core.model.machine import resolve_machine
@@ -20,7 +21,7 @@ from core.model.machine import resolve_machine
 MACHINE_ENV = "NCPERF_MACHINE"
 
 
-def run(app: object, machine: str | None = None, scope: str = "auto") -> str:
+def run(app: ComObject, machine: str | None = None, scope: str = "auto") -> str:
     """Analyse the selected operations (or all: ``scope``) of ESPRIT's active document and
     draw the predicted feed reduction on the layer "ncperf performance".
 

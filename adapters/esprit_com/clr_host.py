@@ -15,7 +15,7 @@ import warnings
 from pathlib import Path
 from types import ModuleType
 
-from adapters.esprit_com.object_model import INDEXER, METHODS, PROG_ID
+from adapters.esprit_com.object_model import INDEXER, METHODS, PROG_ID, ComObject
 from core.model.errors import UsageError
 
 #: Where ``scripts/setup_esprit_emulation.sh`` writes the emulation; this variable overrides it
@@ -80,7 +80,8 @@ def load_emulation() -> ModuleType:
     import clr
 
     clr.AddReference(str(dll))
-    import EspritEmulation
+    # A .NET namespace: importable only once clr has loaded the assembly, so no stubs.
+    import EspritEmulation  # type: ignore[import-not-found]
 
     return EspritEmulation
 
@@ -115,7 +116,7 @@ def attach_running_esprit() -> LateBound:
     return LateBound(app)
 
 
-def as_host(obj: object) -> object:
+def as_host(obj: ComObject) -> ComObject:
     """``obj`` wrapped in :class:`LateBound` if it is a COM object (what the add-in shim
     passes), else unchanged (the emulation, the Python twin)."""
     if "clr" not in sys.modules or isinstance(obj, LateBound):
@@ -149,8 +150,9 @@ class LateBound:
     """
 
     __slots__ = ("_target",)
+    _target: ComObject
 
-    def __init__(self, target: object) -> None:
+    def __init__(self, target: ComObject) -> None:
         object.__setattr__(self, "_target", target)
 
     def __getattr__(self, name: str) -> object:

@@ -10,6 +10,7 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
+from typing import cast
 
 from adapters.esprit_com.clr_host import DotnetUnavailable, attach_running_esprit
 from adapters.esprit_com.draw import Drawing
@@ -67,7 +68,9 @@ def analyze_and_draw(
 ) -> tuple[Analysis, Drawing]:
     """A1 -> A2 -> A3 on one ESPRIT document: the paper's Figure 5 inside ESPRIT."""
     analysis = nc.analyze(source, machine)
-    drawing = nc.display(analysis.toolpath, analysis.annotations, source)
+    # Ncperf.display returns what the claiming ncperf_display hook returned (typed object);
+    # for an EspritSource that is this adapter's Drawing.
+    drawing = cast(Drawing, nc.display(analysis.toolpath, analysis.annotations, source))
     return analysis, drawing
 
 

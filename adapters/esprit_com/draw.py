@@ -27,6 +27,7 @@ from numpy.typing import NDArray
 from adapters.esprit_com import object_model as om
 from adapters.esprit_com.clr_host import exception_text
 from adapters.esprit_com.extract import document_label
+from adapters.esprit_com.object_model import ComObject
 from core.model import geometry as g
 from core.model.errors import NcperfError
 from core.model.tolerances import TOL
@@ -239,7 +240,7 @@ class Drawing:
         )
 
 
-def _find_layer(doc: object, name: str) -> object | None:
+def _find_layer(doc: ComObject, name: str) -> ComObject | None:
     layers = doc.Layers
     for i in range(1, int(layers.Count) + 1):
         layer = layers[i]
@@ -248,7 +249,7 @@ def _find_layer(doc: object, name: str) -> object | None:
     return None
 
 
-def _other_layer(doc: object) -> object:
+def _other_layer(doc: ComObject) -> ComObject:
     layers = doc.Layers
     for i in range(1, int(layers.Count) + 1):
         layer = layers[i]
@@ -264,7 +265,7 @@ def _describe(tp: ToolPath, what: str, moves: NDArray) -> str:
     return f"the {what} of operation '{op}', item{'s' if a != b else ''} {items}"
 
 
-def draw_annotations(doc: object, tp: ToolPath, ann: Annotations) -> Drawing:
+def draw_annotations(doc: ComObject, tp: ToolPath, ann: Annotations) -> Drawing:
     """Draw ``ann`` into ESPRIT document ``doc`` as one undoable step.
 
     Raises
@@ -331,13 +332,13 @@ def draw_annotations(doc: object, tp: ToolPath, ann: Annotations) -> Drawing:
     )
 
 
-def _style(obj: object, colour: int, layer: object) -> None:
+def _style(obj: ComObject, colour: int, layer: ComObject) -> None:
     if not om.USE_ACTIVE_STYLE:
         obj.Color = colour
         obj.Layer = layer
 
 
-def _cancel(doc: object, exc: BaseException) -> None:
+def _cancel(doc: ComObject, exc: BaseException) -> None:
     """Cancel the open undo transaction; a failure to do so is noted on ``exc``."""
     try:
         doc.CloseUndoTransaction(om.UNDO_CANCEL)

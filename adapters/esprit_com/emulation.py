@@ -12,12 +12,14 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from types import ModuleType
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adapters.esprit_com import object_model as om
 from adapters.esprit_com.clr_host import LateBound, load_emulation
+from adapters.esprit_com.object_model import ComObject
 from core.cli.output import atomic_writer
 from core.model import geometry as g
 from core.model.errors import InputError
@@ -44,13 +46,13 @@ class Backend:
     """
 
     name: str
-    ns: object
+    ns: ModuleType
 
     @property
     def dotnet(self) -> bool:
         return self.name != "python-twin"
 
-    def host(self, app: object) -> object:
+    def host(self, app: ComObject) -> ComObject:
         """The Application as the adapter sees it."""
         return LateBound(app) if self.name == "dotnet-latebound" else app
 
@@ -78,7 +80,7 @@ class Backend:
             Marshal.Copy(System.IntPtr(a.ctypes.data), out, 0, a.size)
         return out
 
-    def to_numpy(self, values: object, width: int) -> NDArray[np.float64]:
+    def to_numpy(self, values: ComObject, width: int) -> NDArray[np.float64]:
         if not self.dotnet:
             return np.asarray(values, dtype=np.float64).reshape(-1, width)
         from System import IntPtr
@@ -106,7 +108,9 @@ def backend(name: str) -> Backend:
 def _chunks(feed: NDArray[np.float64], rapid: NDArray[np.bool_]) -> list[tuple[int, int]]:
     """Split moves into runs using at most two distinct feeds (ESPRIT's technology holds an
     XY and a Z feed; the items only say which of the two applies)."""
-    out, start, seen = [], 0, set()
+    out: list[tuple[int, int]] = []
+    start = 0
+    seen: set[float] = set()
     for i, (f, r) in enumerate(zip(feed.tolist(), rapid.tolist(), strict=True)):
         if r or f in seen:
             continue
@@ -137,7 +141,7 @@ def _arc_frames(tp: ToolPath, idx: NDArray[np.int64]) -> NDArray[np.float64]:
     )
 
 
-def fill_document(tp: ToolPath, be: Backend, name: str | None = None) -> object:
+def fill_document(tp: ToolPath, be: Backend, name: str | None = None) -> ComObject:
     """An emulated ESPRIT Application whose document holds ``tp`` as operations.
 
     One PartOperation per operation of ``tp`` -- split where it uses more than two feeds --
@@ -206,7 +210,7 @@ def fill_document(tp: ToolPath, be: Backend, name: str | None = None) -> object:
     return app
 
 
-def raw_document(app: object) -> object:
+def raw_document(app: ComObject) -> ComObject:
     """The emulated Document behind an Application, unwrapped from late binding."""
     return app.Document if not isinstance(app, LateBound) else app._target.Document
 
@@ -255,7 +259,7 @@ class Recording:
         )
 
 
-def recording(app: object, be: Backend) -> Recording:
+def recording(app: ComObject, be: Backend) -> Recording:
     """Read back what is drawn in the emulated document of ``app``."""
     doc = raw_document(app)
     emu = be.ns.Emulation
@@ -332,7 +336,7 @@ def write_recording_svg(rec: Recording, path: str, *, title: str = "") -> str:
         '<rect width="100%" height="100%" fill="#202020"/>',
     ]
     for c in colours:
-        d = []
+        d: list[str] = []
         s = seg[seg[:, 6] == c]
         a0, a1 = px(s[:, 0:2]), px(s[:, 3:5])
         d.extend(

@@ -15,11 +15,13 @@ from __future__ import annotations
 import os
 from collections.abc import Iterator
 from dataclasses import dataclass, replace
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adapters.esprit_com import object_model as om
+from adapters.esprit_com.object_model import ComObject
 from core.model import geometry as g
 from core.model.errors import InputError, Notice
 from core.model.tolerances import TOL
@@ -35,7 +37,7 @@ class EspritSource:
 
     Attributes
     ----------
-    host : object
+    host : ComObject
         ESPRIT ``Application`` or ``Document`` (COM through pythonnet, the .NET emulation or
         the Python twin).
     scope : {"auto", "selected", "all"}
@@ -43,7 +45,7 @@ class EspritSource:
         suppressed; "auto": the selected ones if any operation is selected, else all.
     """
 
-    host: object
+    host: ComObject
     scope: str = "auto"
 
     def __post_init__(self) -> None:
@@ -51,7 +53,7 @@ class EspritSource:
             raise ValueError(f"scope must be one of {SCOPES}, got {self.scope!r}")
 
 
-def optional(obj: object, name: str, default: object = None) -> object:
+def optional(obj: ComObject, name: str, default: object = None) -> ComObject:
     """``obj.name``, or ``default`` where the object model has no such member."""
     try:
         return getattr(obj, name)
@@ -59,7 +61,7 @@ def optional(obj: object, name: str, default: object = None) -> object:
         return default
 
 
-def document_of(source: object) -> object | None:
+def document_of(source: object) -> ComObject | None:
     """The ESPRIT ``Document`` behind ``source``, or None if it is not an ESPRIT object.
 
     Paths are refused before any attribute is touched, so a file never wakes pythonnet.
@@ -76,18 +78,18 @@ def document_of(source: object) -> object | None:
     return None
 
 
-def document_label(doc: object) -> str:
+def document_label(doc: ComObject) -> str:
     """``ESPRIT document NAME``: the ``source`` of the tool path and of its errors."""
     return f"ESPRIT document {optional(doc, 'Name') or 'untitled'}"
 
 
-def _collection(coll: object) -> Iterator[object]:
+def _collection(coll: ComObject) -> Iterator[ComObject]:
     """Items 1..Count of an ESPRIT collection."""
     for i in range(1, int(coll.Count) + 1):
         yield coll[i]
 
 
-def operations(doc: object, scope: str, notes: list[Notice], label: str) -> list[object]:
+def operations(doc: ComObject, scope: str, notes: list[Notice], label: str) -> list[ComObject]:
     """The ``PartOperation`` objects ``scope`` asks for, in document (or selection) order."""
     selected = []
     group = optional(doc, "Group")
@@ -112,7 +114,7 @@ def operations(doc: object, scope: str, notes: list[Notice], label: str) -> list
     return ops
 
 
-def _units(doc: object, notes: list[Notice], label: str) -> tuple[str, float]:
+def _units(doc: ComObject, notes: list[Notice], label: str) -> tuple[str, float]:
     code = optional(doc, om.SYSTEM_UNIT)
     if code is not None and int(code) in om.UNITS:
         return om.UNITS[int(code)]
@@ -124,7 +126,7 @@ def _units(doc: object, notes: list[Notice], label: str) -> tuple[str, float]:
 class _Operation:
     """The raw numbers of one operation's motion items, in document units."""
 
-    def __init__(self, op: object, label: str) -> None:
+    def __init__(self, op: ComObject, label: str) -> None:
         self.name = str(optional(op, "Name") or "unnamed")
         self.label = label
         self.op = op
@@ -188,6 +190,7 @@ class _Operation:
                 )
             feed = self.feed_of(int(item.AuxCode), i)
             data = item.data
+            row: tuple[float, ...]
             if kind in om.SEGMENT_ITEMS:
                 s, e = data.StartPoint, data.EndPoint
                 row = (s.X, s.Y, s.Z, e.X, e.Y, e.Z) + (0.0,) * 6
@@ -371,7 +374,9 @@ def read_esprit(source: object) -> ToolPath:
         names.append(op.name)
     if not parts:
         raise InputError("the operations read hold no move", source=label)
-    cols = {key: np.concatenate([p[key] for p in parts]) for key in parts[0] if key != "op_offsets"}
+    cols: dict[str, Any] = {
+        key: np.concatenate([p[key] for p in parts]) for key in parts[0] if key != "op_offsets"
+    }
     sizes = [p["kind"].shape[0] for p in parts]
     cols["op_offsets"] = np.concatenate([[0], np.cumsum(sizes)]).astype(np.int64)
     tp = ToolPath(**cols, op_names=tuple(names), source=label, units=units)

@@ -18,6 +18,11 @@ and ``AuxCode``) on an operation with rapids, plunges and arcs, and compare with
 from __future__ import annotations
 
 import math
+from typing import Any
+
+#: A late-bound object of ESPRIT's object model (COM, .NET through pythonnet, or the Python
+#: twin): its members are resolved at run time, so it is typed Any.
+ComObject = Any
 
 # ----------------------------------------------------------------------------- connection
 #: ProgID ESPRIT registers for its Application object (seen in public scripts that call

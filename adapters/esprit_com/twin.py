@@ -10,15 +10,36 @@ from __future__ import annotations
 
 import math
 from enum import IntEnum
+from typing import overload
 
 import numpy as np
 from numpy.typing import NDArray
 
 from adapters.esprit_com import object_model as om
 
-espToolPathItemType = IntEnum("espToolPathItemType", om.ITEM_TYPES)
-espGraphicObjectType = IntEnum("espGraphicObjectType", om.GRAPHIC_OBJECT_TYPES)
-espUnitType = IntEnum("espUnitType", om.UNIT_TYPES)
+
+# The enums spelled out member by member (mypy cannot see the members of a functional IntEnum),
+# in the tables' order and with the tables' values.
+class espToolPathItemType(IntEnum):
+    tpiSTART_POINT = om.ITEM_TYPES["tpiSTART_POINT"]
+    tpiEND_POINT = om.ITEM_TYPES["tpiEND_POINT"]
+    tpiSEG2 = om.ITEM_TYPES["tpiSEG2"]
+    tpiSEG3 = om.ITEM_TYPES["tpiSEG3"]
+    tpiARC2 = om.ITEM_TYPES["tpiARC2"]
+    tpiARC3 = om.ITEM_TYPES["tpiARC3"]
+
+
+class espGraphicObjectType(IntEnum):
+    espPoint = om.GRAPHIC_OBJECT_TYPES["espPoint"]
+    espSegment = om.GRAPHIC_OBJECT_TYPES["espSegment"]
+    espArc = om.GRAPHIC_OBJECT_TYPES["espArc"]
+    espOperation = om.GRAPHIC_OBJECT_TYPES["espOperation"]
+
+
+class espUnitType(IntEnum):
+    espInch = om.UNIT_TYPES["espInch"]
+    espMetric = om.UNIT_TYPES["espMetric"]
+
 
 T = espToolPathItemType
 
@@ -81,6 +102,10 @@ class ComArc:
         return self.Radius * (sweep if sweep > 0 else sweep + 2 * math.pi)
 
 
+@overload
+def _copy(data: ComPoint) -> ComPoint: ...
+@overload
+def _copy(data: object) -> object: ...
 def _copy(data: object) -> object:
     if isinstance(data, ComSegment):
         return ComSegment(_copy(data.StartPoint), _copy(data.EndPoint))
@@ -334,7 +359,8 @@ class Emulation:
         for t, a, d in zip(
             np.asarray(types).tolist(), np.asarray(aux).tolist(), data.tolist(), strict=True
         ):
-            length, obj = 0.0, None
+            length = 0.0
+            obj: ComPoint | ComSegment | ComArc | None = None
             if t in (T.tpiSTART_POINT, T.tpiEND_POINT):
                 obj = ComPoint(*d[0:3])
             elif t in (T.tpiSEG2, T.tpiSEG3):

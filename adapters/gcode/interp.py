@@ -332,7 +332,7 @@ class Interpreter:
         absolute = (self.distance == 900) | machine
         pos = np.zeros((self.na, 3))
         known = np.zeros((self.na, 3), dtype=bool)
-        for k, ch in enumerate(AXIS_LETTERS):
+        for axis, ch in enumerate(AXIS_LETTERS):
             gvn = given[ch]
             mm = np.where(gvn, vals[ch], 0.0) * self.scale
             abs_set = gvn & absolute
@@ -341,8 +341,8 @@ class Interpreter:
             last = np.where(abs_set, np.arange(self.na), -1)
             np.maximum.accumulate(last, out=last)
             base = np.where(last >= 0, mm[np.maximum(last, 0)] - csum[np.maximum(last, 0)], 0.0)
-            pos[:, k] = base + csum
-            known[:, k] = np.maximum.accumulate(gvn)
+            pos[:, axis] = base + csum
+            known[:, axis] = np.maximum.accumulate(gvn)
         self.pos = pos
         self.known = known
 
@@ -500,8 +500,10 @@ class Interpreter:
             at = np.array([line for line, _ in ctol])
             val = np.array([v for _, v in ctol])
             # The last CTOL at or before each move's line, in that line's units.
-            k = np.searchsorted(at, al[mi], side="right") - 1
-            cols["tolerance"] = np.where(k >= 0, val[np.maximum(k, 0)] * self.scale[mi], np.nan)
+            last = np.searchsorted(at, al[mi], side="right") - 1
+            cols["tolerance"] = np.where(
+                last >= 0, val[np.maximum(last, 0)] * self.scale[mi], np.nan
+            )
 
         # Tools and operations.
         tvals, tpres = self.vals["T"], self.pres["T"]

@@ -107,8 +107,8 @@ COMMON: dict[int, GCode] = {
 }
 for _code in (73, 74, 76, 81, 82, 83, 84, 85, 86, 87, 88, 89):
     COMMON[_c(_code)] = GCode(None, f"canned cycle G{_code} is not supported")
-for _code in (38.2, 38.3, 38.4, 38.5):
-    COMMON[_c(_code)] = GCode(None, f"probing G{_code} is not supported")
+for _probe in (38.2, 38.3, 38.4, 38.5):
+    COMMON[_c(_probe)] = GCode(None, f"probing G{_probe} is not supported")
 
 FANUC: dict[int, GCode] = {
     **COMMON,

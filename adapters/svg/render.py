@@ -38,6 +38,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from core.cli.output import atomic_writer
+from core.diagnosis.diagnose import Diagnosis
 from core.diagnosis.rules import BEST_SHARE
 from core.model import geometry as g
 from core.model.tolerances import TOL
@@ -1090,11 +1091,12 @@ def _feed_plot(
     return "".join(out)
 
 
-def render_diagnosis(tp: ToolPath, ann: Annotations, diagnosis: object, view: str = "xy") -> bytes:
+def render_diagnosis(
+    tp: ToolPath, ann: Annotations, diagnosis: Diagnosis, view: str = "xy"
+) -> bytes:
     """The path coloured by gap (measured against predicted feed), the gap zones numbered,
-    and measured against predicted feed over arc length for the worst zones.
-
-    ``diagnosis`` is a :class:`core.diagnosis.diagnose.Diagnosis`; ``ann`` its annotations.
+    and measured against predicted feed over arc length for the worst zones (``ann``: the
+    diagnosis's annotations).
     """
     d = diagnosis
     if view not in PROJECTIONS:

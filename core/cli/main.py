@@ -281,7 +281,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
             fh.write("\n")
         print(f"  json             {args.json}")
     if args.svg:
-        from core.view.targets import DiagnosisTarget
+        from core.diagnosis.diagnose import DiagnosisTarget
 
         written = nc.display(tp, d.annotations(), DiagnosisTarget(args.svg, d, view=args.view))
         print(f"  svg              {written}")

@@ -203,9 +203,9 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
 
     kinds = np.array(KIND_LABELS, dtype=object)
     el_lim = np.where(ev.element_limit >= 0, ev.element_limit, 0)
-    el_cause = np.where(
-        ev.element_indicator >= 0, names[ev.element_indicator] + ": " + labels[el_lim], None
-    )
+    el_cause = np.full(tp.n, None, dtype=object)
+    capped = ev.element_indicator >= 0
+    el_cause[capped] = (names[ev.element_indicator] + ": " + labels[el_lim])[capped]
     pr = an.profile
     ecols = [
         tp.line.tolist(),

@@ -25,6 +25,7 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
 
 from __future__ import annotations
 
+from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -50,6 +51,7 @@ from core.engine.indicators import IndicatorSource
 from core.engine.predict import Prediction
 from core.model.toolpath import ToolPath
 from core.view.annotations import Annotations
+from core.view.targets import file_target
 
 
 @dataclass(frozen=True)
@@ -117,7 +119,7 @@ class Diagnosis:
         return Annotations(
             title=tp.source,
             machine=self.before.setup.machine.name,
-            move_class=cls,
+            move_class=cls.astype(np.int8),
             junction=z,
             junction_class=z.astype(np.int8),
             junction_feed=z.astype(float),
@@ -137,11 +139,11 @@ class Diagnosis:
 def diagnose(
     indicators_of: IndicatorSource,
     tp: ToolPath,
-    alignments: list[Alignment],
-    labels: list[str],
+    alignments: Sequence[Alignment],
+    labels: Sequence[str],
     base: Setup,
     baseline: str,
-    effects: dict[str, Effect],
+    effects: Mapping[str, Effect],
 ) -> Diagnosis:
     """The diagnosis of one program against its aligned traces (see the module docstring)."""
     return diagnose_cases(indicators_of, [(tp, alignments, labels)], base, baseline, effects)
@@ -149,10 +151,10 @@ def diagnose(
 
 def diagnose_cases(
     indicators_of: IndicatorSource,
-    cases: list[tuple[ToolPath, list[Alignment], list[str]]],
+    cases: Sequence[tuple[ToolPath, Sequence[Alignment], Sequence[str]]],
     base: Setup,
     baseline: str,
-    effects: dict[str, Effect],
+    effects: Mapping[str, Effect],
 ) -> Diagnosis:
     """The diagnosis of several programs, each with its aligned traces, on one machine:
     effects are fitted on some traces and measured on the others (see the module docstring)."""
@@ -238,3 +240,23 @@ def diagnose_cases(
         befores=tuple(before),
         afters=tuple(current_preds),
     )
+
+
+@dataclass(frozen=True, eq=False)
+class DiagnosisTarget:
+    """A file to draw a diagnosis into: the path coloured by gap, the gap zones, and measured
+    against predicted feed over arc length for the worst of them (``ncperf diagnose``).
+
+    Attributes
+    ----------
+    path : str
+    diagnosis : Diagnosis
+    view : {"xy", "xz", "yz", "iso"}
+    """
+
+    path: str
+    diagnosis: Diagnosis
+    view: str = "xy"
+
+    def __post_init__(self) -> None:
+        file_target(self)

@@ -3,6 +3,7 @@ than ``GAP_SHARE`` of F, with their program lines, what is there, and the second
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -49,7 +50,9 @@ def _features(tp: ToolPath, pred: Prediction, moves: NDArray[np.int64]) -> str:
     return "long straight"
 
 
-def gap_zones(preds: list[Prediction], data: list[Data], count: int = ZONES) -> tuple[GapZone, ...]:
+def gap_zones(
+    preds: Sequence[Prediction], data: Sequence[Data], count: int = ZONES
+) -> tuple[GapZone, ...]:
     """Where |measured - predicted| exceeds GAP_SHARE of F, worst (most seconds) first."""
     zones = []
     for d in data:

@@ -16,6 +16,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -76,7 +77,7 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
     )
 
 
-def split(data: list[Data]) -> tuple[list[Data], str]:
+def split(data: Sequence[Data]) -> tuple[list[Data], str]:
     """Calibration / held-out split (see the module docstring).
 
     Several runs of one program: alternate runs. Otherwise (one run, or one run of each of
@@ -105,7 +106,7 @@ def split(data: list[Data]) -> tuple[list[Data], str]:
     )
 
 
-def gap(preds: list[Prediction], data: list[Data], which: str) -> float:
+def gap(preds: Sequence[Prediction], data: Sequence[Data], which: str) -> float:
     """RMS over time of measured - predicted feed (mm/min) on the calibration, held-out or
     all data."""
     sq, n = 0.0, 0.0
@@ -126,7 +127,7 @@ def gap(preds: list[Prediction], data: list[Data], which: str) -> float:
     return math.sqrt(sq / n) * PER_MIN if n > 0 else 0.0
 
 
-def feed_level(data: list[Data]) -> float:
+def feed_level(data: Sequence[Data]) -> float:
     """RMS over time of the programmed feed on the held-out data (mm/min)."""
     sq, n = 0.0, 0.0
     for d in data:

@@ -25,6 +25,7 @@ from __future__ import annotations
 import dataclasses
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -67,6 +68,25 @@ class Param:
 
 
 @dataclass(frozen=True)
+class ElementCap:
+    """An extra per-block feed limit an effect adds to the prediction.
+
+    Attributes
+    ----------
+    limit : callable (ToolPath, Machine) -> (n,) float, mm/s
+        The cap on every move (inf where there is none).
+    indicator : str
+        The name the reports give it (where it binds, like a plugin's indicator).
+    label : str
+        The limit's name ("centripetal limit").
+    """
+
+    limit: Callable[[ToolPath, Machine], NDArray[np.float64]]
+    indicator: str
+    label: str
+
+
+@dataclass(frozen=True)
 class Setup:
     """What a prediction is built from (see the module docstring).
 
@@ -82,8 +102,8 @@ class Setup:
         controller that applies its override after planning (LinuxCNC) scales these too.
     tolerance : float or None, mm
     lookahead : int or None, blocks
-    element_caps : tuple of callables (ToolPath, Machine) -> (n,) mm/s
-        Extra per-block feed limits (inf where none).
+    element_caps : tuple of ElementCap
+        Extra per-block feed limits.
     compression : tuple (max_angle rad, max_length mm) or None
     servo_tau, filter_window : float, s
     end_factor, arc_factor : float
@@ -96,14 +116,14 @@ class Setup:
     cap_scale: float = 1.0
     tolerance: float | None = None
     lookahead: int | None = None
-    element_caps: tuple[Callable[[ToolPath, Machine], NDArray[np.float64]], ...] = ()
+    element_caps: tuple[ElementCap, ...] = ()
     compression: tuple[float, float] | None = None
     servo_tau: float = 0.0
     filter_window: float = 0.0
     end_factor: float = 1.0
     arc_factor: float = 1.0
 
-    def replace(self, **changes: object) -> Setup:
+    def replace(self, **changes: Any) -> Setup:
         return dataclasses.replace(self, **changes)
 
 

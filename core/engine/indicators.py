@@ -153,14 +153,8 @@ class Evaluation:
     element_indicator: NDArray[np.int64]
     element_limit: NDArray[np.int64]
     min_length: NDArray[np.float64]
-    junction_hold: NDArray[np.float64] | None = None
-    junction_travel: NDArray[np.float64] | None = None
-
-    def __post_init__(self) -> None:
-        if self.junction_hold is None:
-            object.__setattr__(self, "junction_hold", np.zeros(self.junction.size))
-        if self.junction_travel is None:
-            object.__setattr__(self, "junction_travel", self.junction_hold)
+    junction_hold: NDArray[np.float64]
+    junction_travel: NDArray[np.float64]
 
     @cached_property
     def junction_reduction(self) -> NDArray[np.float64]:

@@ -182,27 +182,24 @@ def predict(indicators_of: IndicatorSource, tp: ToolPath, setup: Setup) -> Predi
     tp : ToolPath
     setup : Setup
     """
-    changes = {}
+    tp2 = tp
     if setup.feed_scale != 1.0:
-        changes["feed"] = tp.feed * setup.feed_scale
+        tp2 = dataclasses.replace(tp2, feed=tp.feed * setup.feed_scale)
     if setup.tolerance is not None:
-        changes["tolerance"] = np.full(tp.n, float(setup.tolerance))
-    tp2 = dataclasses.replace(tp, **changes) if changes else tp
+        tp2 = dataclasses.replace(tp2, tolerance=np.full(tp.n, float(setup.tolerance)))
     m = setup.machine
     indicators = indicators_of(tp2, m)
-    for fn in setup.element_caps:
-        cap = np.asarray(fn(tp2, m), dtype=np.float64)
+    for extra in setup.element_caps:
+        cap = np.asarray(extra.limit(tp2, m), dtype=np.float64)
         idx = np.flatnonzero(tp2.is_feed & np.isfinite(cap))
-        name = getattr(fn, "indicator", "effect")
-        label = getattr(fn, "label", "effect limit")
         indicators.append(
             Indicator(
-                name=name,
+                name=extra.indicator,
                 at="element",
                 index=idx,
                 feed=cap[idx],
                 limit=np.zeros(idx.size, dtype=np.int64),
-                labels=(label,),
+                labels=(extra.label,),
             )
         )
     if setup.compression is not None:

@@ -205,20 +205,11 @@ class Profile:
     a_up: NDArray[np.float64]
     a_down: NDArray[np.float64]
     time: NDArray[np.float64]
-    hold_start: NDArray[np.float64] | None = None
-    hold_end: NDArray[np.float64] | None = None
-    hold_start_ratio: NDArray[np.float64] | None = None
-    hold_end_ratio: NDArray[np.float64] | None = None
+    hold_start: NDArray[np.float64]
+    hold_end: NDArray[np.float64]
+    hold_start_ratio: NDArray[np.float64]
+    hold_end_ratio: NDArray[np.float64]
     ramps: tuple[NDArray, ...] | None = None
-
-    def __post_init__(self) -> None:
-        n = self.time.size
-        for name in ("hold_start", "hold_end"):
-            if getattr(self, name) is None:
-                object.__setattr__(self, name, np.zeros(n))
-        for name in ("hold_start_ratio", "hold_end_ratio"):
-            if getattr(self, name) is None:
-                object.__setattr__(self, name, np.ones(n))
 
     @property
     def toolpath(self) -> ToolPath:
@@ -326,7 +317,7 @@ class Profile:
             raise ValueError(f"dt must be positive, got {dt}")
         tp = self.toolpath
         n_s = int(np.floor(self.cycle_time / dt + TOL.rel_equal)) + 1
-        t = np.arange(n_s) * dt
+        t = np.arange(n_s, dtype=np.float64) * dt
         k = np.clip(np.searchsorted(self.start_time, t, side="right") - 1, 0, tp.n - 1)
         tau = t - self.start_time[k]
         t_up, t_dn, d_up, d_dn, d_cr = self._phases

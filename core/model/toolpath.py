@@ -10,6 +10,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 from enum import IntEnum
 from functools import cached_property
+from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -63,7 +64,7 @@ class ExtractOptions:
 
 
 def _column(x: ArrayLike, n: int, name: str, dtype: type) -> NDArray:
-    a = np.ascontiguousarray(x, dtype=dtype)
+    a: NDArray = np.ascontiguousarray(x, dtype=dtype)
     if a.shape != (n,):
         raise ValueError(f"{name} must have shape ({n},), got {a.shape}")
     return a
@@ -440,7 +441,7 @@ class ToolPath:
         return f"{lo}" if lo == hi else f"{lo}-{hi}"
 
 
-def empty_columns(n: int) -> dict[str, NDArray]:
+def empty_columns(n: int) -> dict[str, Any]:
     """Default columns for ``n`` moves, for adapters and tests to fill in."""
     return {
         "kind": np.full(n, MoveKind.LINE, dtype=np.int8),
@@ -499,7 +500,7 @@ def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
     mode = tp.path_mode.copy()
     np.maximum.at(mode, target[has], tp.path_mode[removed[has]])
     offs = np.concatenate([[0], np.cumsum(keep)])[tp.op_offsets].astype(np.int64)
-    cols = {
+    cols: dict[str, Any] = {
         "kind": tp.kind[keep],
         "start": tp.start[keep],
         "end": tp.end[keep],

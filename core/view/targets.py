@@ -1,4 +1,5 @@
-"""What a display draws into: a file, several programs side by side, a diagnosis.
+"""What a display draws into: a file, several programs side by side (a diagnosis:
+:class:`core.diagnosis.diagnose.DiagnosisTarget`).
 
 A target names the output and the projection; its extension (or host) picks the display
 (the A3 hook stops at the first display that handles it).
@@ -8,11 +9,12 @@ from __future__ import annotations
 
 import os
 from dataclasses import dataclass
+from typing import Any
 
 VIEWS = ("xy", "xz", "yz", "iso")
 
 
-def _file_target(target: object) -> None:
+def file_target(target: Any) -> None:
     """Check a drawing target's view and keep its path as ``str`` (the targets are frozen)."""
     object.__setattr__(target, "path", os.fspath(target.path))
     if target.view not in VIEWS:
@@ -35,7 +37,7 @@ class FileTarget:
     view: str = "xy"
 
     def __post_init__(self) -> None:
-        _file_target(self)
+        file_target(self)
 
 
 @dataclass(frozen=True, eq=False)
@@ -56,24 +58,4 @@ class ComparisonTarget:
     view: str = "xy"
 
     def __post_init__(self) -> None:
-        _file_target(self)
-
-
-@dataclass(frozen=True, eq=False)
-class DiagnosisTarget:
-    """A file to draw a diagnosis into: the path coloured by gap, the gap zones, and measured
-    against predicted feed over arc length for the worst of them (``ncperf diagnose``).
-
-    Attributes
-    ----------
-    path : str
-    diagnosis : core.diagnosis.diagnose.Diagnosis
-    view : {"xy", "xz", "yz", "iso"}
-    """
-
-    path: str
-    diagnosis: object
-    view: str = "xy"
-
-    def __post_init__(self) -> None:
-        _file_target(self)
+        file_target(self)

@@ -8,19 +8,18 @@ parameters (a normal_acceleration_factor scales the acceleration part).
 
 from __future__ import annotations
 
-from core import hookimpl
-from core.engine.effects import Effect, arc_caps
+from core import Machine, ToolPath, hookimpl
+from core.engine.effects import Effect, ElementCap, Setup, arc_caps
 
 
-def _caps(tp, machine):
+def _limit(tp: ToolPath, machine: Machine):
     return arc_caps(tp, machine, jerk=True)
 
 
-_caps.indicator = "arc_feed_limit"
-_caps.label = "centripetal limit"
+_caps = ElementCap(_limit, indicator="arc_feed_limit", label="centripetal limit")
 
 
-def _apply(setup, p):
+def _apply(setup: Setup, p):
     return setup.replace(element_caps=setup.element_caps + (_caps,))
 
 

@@ -10,19 +10,18 @@ from __future__ import annotations
 
 import dataclasses
 
-from core import hookimpl
-from core.engine.effects import Effect, Param, arc_caps
+from core import Machine, ToolPath, hookimpl
+from core.engine.effects import Effect, ElementCap, Param, Setup, arc_caps
 
 
-def _caps(tp, machine):
+def _limit(tp: ToolPath, machine: Machine):
     return arc_caps(tp, machine, jerk=False)
 
 
-_caps.indicator = "normal_acceleration_factor"
-_caps.label = "centripetal limit"
+_caps = ElementCap(_limit, indicator="normal_acceleration_factor", label="centripetal limit")
 
 
-def _apply(setup, p):
+def _apply(setup: Setup, p):
     machine = dataclasses.replace(setup.machine, normal_acceleration_factor=p["factor"])
     return setup.replace(machine=machine, element_caps=setup.element_caps + (_caps,))
 
