@@ -14,6 +14,28 @@ MAX_LINE = 4096
 
 LF, SPACE = 10, 32
 
+#: Extensions CAM posts use for G-code.
+GCODE_EXTENSIONS = frozenset(
+    {
+        ".nc",
+        ".ngc",
+        ".gcode",
+        ".gc",
+        ".g",
+        ".tap",
+        ".cnc",
+        ".mpf",
+        ".spf",
+        ".ptp",
+        ".eia",
+        ".iso",
+        ".min",
+        ".din",
+        ".fnc",
+        ".nci",
+    }
+)
+
 
 class Source:
     """The raw bytes and line offsets of a file, for the readers and for messages."""

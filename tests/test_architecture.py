@@ -204,6 +204,21 @@ def test_packages_keep_to_their_side(importer, forbidden):
     assert bad == []
 
 
+def test_adapters_do_not_import_each_other():
+    """Each adapter stands alone (a CL file does not load the G-code reader): adapters share
+    only adapters/source.py."""
+    bad = [
+        f"{a} -> {b}"
+        for a, deps in GRAPH.items()
+        if a.startswith("adapters.") and a != "adapters.source"
+        for b in deps
+        if b.startswith("adapters.")
+        and b != "adapters.source"
+        and b.split(".")[1] != a.split(".")[1]
+    ]
+    assert bad == []
+
+
 def test_every_code_folder_is_a_package():
     """Packages are found by discovery (pyproject.toml), which needs an __init__.py: a code
     folder without one would silently be left out of the wheel."""

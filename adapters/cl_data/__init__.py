@@ -21,8 +21,7 @@ from pathlib import Path
 
 from adapters.cl_data.interp import interpret
 from adapters.cl_data.source import scan_gotos
-from adapters.gcode import EXTENSIONS as GCODE_EXTENSIONS  # never claimed, whatever they hold
-from adapters.source import Source, check_bytes
+from adapters.source import GCODE_EXTENSIONS, Source, check_bytes  # G-code: never claimed
 from core import InputError, ToolPath, hookimpl
 
 #: Extensions CAM systems give CL data (NX .cls/.clsf, Creo .ncl, SolidWorks CAM .apt...).

@@ -16,29 +16,11 @@ from pathlib import Path
 from adapters.gcode.interp import interpret
 from adapters.gcode.lexer import Source, tokenize
 from adapters.gcode.words import DIALECTS
+from adapters.source import GCODE_EXTENSIONS
 from core import ExtractOptions, InputError, ToolPath, UsageError, hookimpl
 
-#: Extensions CAM posts use for G-code.
-EXTENSIONS = frozenset(
-    {
-        ".nc",
-        ".ngc",
-        ".gcode",
-        ".gc",
-        ".g",
-        ".tap",
-        ".cnc",
-        ".mpf",
-        ".spf",
-        ".ptp",
-        ".eia",
-        ".iso",
-        ".min",
-        ".din",
-        ".fnc",
-        ".nci",
-    }
-)
+#: Extensions CAM posts use for G-code (shared with the CL reader, which never claims them).
+EXTENSIONS = GCODE_EXTENSIONS
 
 _LOOKS_LIKE_GCODE = re.compile(rb"^[ \t]*(?:%|[Nn]\d+[ \t]*)?[GgMm]\d", re.MULTILINE)
 
