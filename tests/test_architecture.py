@@ -268,3 +268,18 @@ def test_no_epsilons_outside_the_tolerances():
                 ):
                     found.append(f"{path.relative_to(ROOT)}:{node.lineno}: {node.value!r}")
     assert found == []
+
+
+def test_no_module_imports_another_modules_private_names():
+    """A name starting with "_" is its module's own: other modules use the public layer
+    (e.g. ToolPath.point_at, not the alignment's private helper)."""
+    found = []
+    for name, path in MODULES.items():
+        for node in _walk(ast.parse(path.read_text(), str(path))):
+            if isinstance(node, ast.ImportFrom) and node.module != "__future__":
+                found += [
+                    f"{name}: from {node.module} import {a.name}"
+                    for a in node.names
+                    if a.name.startswith("_") and not a.name.startswith("__")
+                ]
+    assert found == []

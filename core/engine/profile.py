@@ -227,9 +227,9 @@ class Profile:
         return np.concatenate([[0.0], np.cumsum(span)[:-1]])
 
     @cached_property
-    def _phases(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
-        """Durations and lengths of each move's acceleration, cruise and braking (between
-        its holds)."""
+    def phases(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        """(n,) arrays of each move's acceleration time, braking time (s), acceleration
+        length, braking length and cruise length (mm), between its holds."""
         v0, v1, vp = self.v_entry, self.v_exit, self.v_peak
         au, ad = self.a_up, self.a_down
         t_up = (vp - v0) / au
@@ -241,7 +241,8 @@ class Profile:
         return t_up, t_dn, d_up, d_dn, d_cr
 
     @cached_property
-    def _hold_times(self) -> tuple[NDArray, NDArray]:
+    def hold_times(self) -> tuple[NDArray, NDArray]:
+        """(n,) time (s) each move spends in its start hold and in its end hold."""
         with np.errstate(divide="ignore", invalid="ignore"):
             h0 = np.where(
                 self.hold_start > 0, self.hold_start_ratio * self.hold_start / self.v_entry, 0.0
@@ -320,8 +321,8 @@ class Profile:
         t = np.arange(n_s, dtype=np.float64) * dt
         k = np.clip(np.searchsorted(self.start_time, t, side="right") - 1, 0, tp.n - 1)
         tau = t - self.start_time[k]
-        t_up, t_dn, d_up, d_dn, d_cr = self._phases
-        th0, th1 = self._hold_times
+        t_up, t_dn, d_up, d_dn, d_cr = self.phases
+        th0, th1 = self.hold_times
         v0, vp, ad, au = self.v_entry[k], self.v_peak[k], self.a_down[k], self.a_up[k]
         v1 = self.v_exit[k]
         tu, tdn, du = t_up[k], t_dn[k], d_up[k]

@@ -97,8 +97,8 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     if tp.n == 0:
         return () if count is not None else 0
     feed = tp.is_feed
-    t_up, t_dn, d_up, d_dn, _ = profile._phases
-    th0, th1 = profile._hold_times
+    t_up, t_dn, d_up, d_dn, _ = profile.phases
+    th0, th1 = profile.hold_times
     # The holds at a move's ends (inserted arcs) belong with its acceleration and braking.
     d_up = d_up + profile.hold_start
     d_dn = d_dn + profile.hold_end
