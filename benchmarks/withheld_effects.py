@@ -3,7 +3,7 @@
 Not a test: ``python benchmarks/withheld_effects.py [--seed N] [--draws K] [--full]`` (about
 15 minutes on 2 cores with the defaults).
 
-Every case runs a set of bundled example programs on the reference virtual machine
+Every case runs a set of bundled example programs on the reference interpreter
 (``refvm``, an interpreter that imports nothing of ncperf) with **one** controller
 effect switched on at a random strength (seeded: the same seed gives the same cases),
 records 1 ms traces, and hands them to the diagnosis without saying which effect was on. The
@@ -122,7 +122,7 @@ def main() -> int:
     programs = FULL if args.full else PROGRAMS
     tps = {p: nc.extract(str(EXAMPLES / f"{p}.ngc")) for p in programs}
     print(
-        f"Withheld effects, virtual machine traces (1 ms), {datetime.date.today()}; seed "
+        f"Withheld effects, reference-interpreter traces (1 ms), {datetime.date.today()}; seed "
         f"{args.seed}, {args.draws} strengths per effect; programs: {', '.join(programs)}"
     )
     print()

@@ -1,4 +1,4 @@
-"""The controller effects the virtual machine can switch on, one at a time.
+"""The controller effects the reference interpreter can switch on, one at a time.
 
 :data:`EFFECTS` is ``{name: {param: (low, high, default)}}`` in the interpreter's units (s,
 mm, degrees for angles); its names are those of ncperf's effects, so that a diagnosis can be

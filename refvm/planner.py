@@ -1,8 +1,8 @@
-"""The virtual machine's interpolator: a jerk-limited path-speed planner stepped at the cycle.
+"""The reference interpreter's planner: a jerk-limited path-speed planner stepped at the cycle.
 
-This is the motion half of the reference controller, written without ``core.engine.profile``: it
+This is the motion half of the reference controller, written without ncperf's profile: it
 knows nothing of ncperf's forward/backward passes or effective accelerations. It takes the
-limits (:class:`Limits`) and steps time. Its units are the segments of :mod:`vm.limits`
+limits (:class:`Limits`) and steps time. Its units are the segments of :mod:`refvm.limits`
 (moves, parts of moves, corner arcs); below they are called moves.
 
 State and step
@@ -436,7 +436,8 @@ class _Planner:
                 stalled += dt
                 if stalled > STALL_TIME:
                     raise RuntimeError(
-                        f"virtual machine stalled at s = {s:.6f} mm in move {b} (v = {v}, a = {a})"
+                        f"reference interpreter stalled at s = {s:.6f} mm in move {b} "
+                        f"(v = {v}, a = {a})"
                     )
         return Motion(
             s=np.frombuffer(out_s, dtype=np.float64).copy(),

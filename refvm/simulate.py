@@ -48,7 +48,7 @@ CHUNK = 200_000
 
 @dataclass(frozen=True, eq=False)
 class Trace:
-    """A trace of the virtual machine, one row per controller cycle.
+    """A trace of the reference interpreter, one row per controller cycle.
 
     Attributes
     ----------

@@ -375,7 +375,7 @@ def test_effects_table_is_consistent():
     ["fig1_polygons_F4000", "fig3_semicircle_spiral", "fig4_points_d1", "zlevel_cavity"],
 )
 def test_cycle_time_agrees_with_ncperf(nc, program, preset):
-    """Without effect the virtual machine's cycle time is ncperf's predicted one within 2 %."""
+    """Without effect the reference interpreter's cycle time is ncperf's prediction within 2 %."""
     m = load_preset(preset)
     tp = nc.extract(str(ROOT / "examples" / f"{program}.ngc"))
     tr = simulate(tp, m)
