@@ -7,11 +7,10 @@ from __future__ import annotations
 
 import argparse
 from collections.abc import Mapping, Sequence
+from typing import TYPE_CHECKING
 
 import pluggy
 
-from core.diagnosis.align import Alignment
-from core.diagnosis.diagnose import Diagnosis, diagnose_cases
 from core.engine.effects import Effect, Setup, setup_for
 from core.engine.indicators import Evaluation, Indicator, combine
 from core.engine.predict import Prediction, predict
@@ -23,6 +22,10 @@ from core.model.trace import Trace, TraceOptions
 from core.plugins import make_plugin_manager
 from core.view.analysis import Analysis
 from core.view.annotations import Annotations, build_annotations
+
+if TYPE_CHECKING:
+    from core.diagnosis.align import Alignment
+    from core.diagnosis.diagnose import Diagnosis
 
 
 class Ncperf:
@@ -137,6 +140,8 @@ class Ncperf:
         """The diagnosis of programs against their aligned traces (each case: a tool path,
         its alignments and their labels), on one machine (``base``), with these effects
         (see :mod:`core.diagnosis.diagnose`)."""
+        from core.diagnosis.diagnose import diagnose_cases  # only the diagnosis pays for it
+
         return diagnose_cases(self.indicators, cases, base, baseline, effects)
 
     # command line

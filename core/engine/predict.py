@@ -34,11 +34,17 @@ class Prediction:
     evaluation : Evaluation
     profile : Profile or None
         None for the paper's point model (no ramps).
+    path : ToolPath or None
+        The tool path as given, before the setup scaled its feeds or replaced its
+        tolerances (the same geometry as ``evaluation.toolpath``): where filtered positions
+        are placed on the path, so that every prediction of one program shares one sampling
+        of it. None: the evaluation's.
     """
 
     setup: Setup
     evaluation: Evaluation
     profile: Profile | None
+    path: ToolPath | None = None
 
     @property
     def toolpath(self) -> ToolPath:
@@ -77,7 +83,7 @@ class Prediction:
             return None
         t, s, _ = self.signal(raw=True)
         dt = t[1] - t[0] if t.size > 1 else SIGNAL_DT
-        tp = self.toolpath
+        tp = self.path if self.path is not None else self.toolpath
         # Rest before and after, long enough for the filters' tails to carry the distance.
         head = int(np.ceil(0.5 * su.filter_window / dt)) + 1
         tail = head + int(np.ceil(8.0 * su.servo_tau / dt)) + 1
@@ -257,4 +263,4 @@ def predict(indicators_of: IndicatorSource, tp: ToolPath, setup: Setup) -> Predi
         if setup.ramps
         else None
     )
-    return Prediction(setup=setup, evaluation=ev, profile=profile)
+    return Prediction(setup=setup, evaluation=ev, profile=profile, path=tp)
