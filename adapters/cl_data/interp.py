@@ -44,6 +44,7 @@ import dataclasses
 import math
 import re
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -57,6 +58,16 @@ from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
 
 INCH = 25.4
+#: CL drilling cycles ncperf expands (APT CYCLE/ records; NX and SolidWorks CAM write them).
+CYCLE_KINDS = ("DRILL", "DEEP", "DEEP2", "BRKCHP", "TAP", "BORE", "REAM", "FACE", "CSINK")
+
+
+def _is_number(text: str) -> bool:
+    try:
+        float(text)
+    except ValueError:
+        return False
+    return True
 PLUS_Z = (0.0, 0.0, 1.0)
 #: cos of the angle within which an arc counts as tangent to (or reversed against) a line:
 #: 2e-3 rad, the tangency tolerance of the curvature model (TOL.tangent_angle).
@@ -122,6 +133,7 @@ class Reader:
         self.boundaries: list[tuple[int, str | None]] = []  # (first move, TOOL PATH name)
         self.passive: dict[str, list[int]] = {}
         self.tool_paths = bool(_TOOL_PATH.search(src.data))
+        self.cycle: dict[str, Any] | None = None  # the active CYCLE/
         self.handlers = {
             "GOTO": self._goto,
             "FROM": self._from,
@@ -259,6 +271,11 @@ class Reader:
                 k1 - k0,
             )
             return
+        if self.cycle is not None:
+            self._take_pending()
+            for k in range(k0, k1):
+                self._hole(int(self.fast.line[k]), self.fast.xyz[k] * self.scale)
+            return
         rapid, arc = self._take_pending()
         self._chunk(_FAST, k0, k1, self.scale)
         self.last_goto = (rapid, arc) if k1 - k0 == 1 else (False, None)
@@ -316,6 +333,10 @@ class Reader:
 
     def _goto(self, rec: Record) -> None:
         xyz, ijk = self._xyz_ijk(rec, "GOTO")
+        if self.cycle is not None:
+            self._take_pending()
+            self._hole(rec.line, xyz)
+            return
         rapid, arc = self._take_pending()
         self._point(rec, xyz, ijk)
         self.last_goto = (rapid, arc)
@@ -521,9 +542,105 @@ class Reader:
         )
 
     def _cycle(self, rec: Record) -> None:
-        if [a.upper() for a in rec.args or []] == ["OFF"]:
+        """CYCLE/type, FEDTO d, RAPTO r, RTRCTO c, MMPM|IPM f, STEP|1STPECK/SUBPECK,
+        DWELL t: while on, each GOTO is a hole whose top is the point (see
+        :func:`_expand_cycle`); CYCLE/OFF ends it, CYCLE/INIT (SolidWorks CAM) marks its start."""
+        args = [a.strip().upper() for a in rec.args or []]
+        if not args or args[0] == "OFF":
+            self.cycle = None
             return
-        raise self._error(rec, W.ERRORS["CYCLE"])
+        if args[0] == "INIT":
+            return
+        kind = args[0]
+        if kind not in CYCLE_KINDS:
+            raise self._error(rec, f"CYCLE/{kind} is not a drilling cycle ncperf knows")
+        c: dict[str, Any] = {"kind": kind, "line": rec.line}
+        k = 1
+        while k < len(args):
+            word = args[k]
+            nxt = args[k + 1] if k + 1 < len(args) else None
+            if word in ("DEEP", "BRKCHP", "DRILL", "TAP", "BORE", "REAM", "FACE", "CSINK"):
+                c["kind"] = word if kind == "DRILL" else kind
+                k += 1
+                continue
+            if nxt is None or not _is_number(nxt):
+                if word in ("RTRCTO",) and nxt == "AUTO":
+                    k += 2
+                    continue
+                raise self._error(rec, f"CYCLE/{kind}: {word} without its value")
+            v = float(nxt)
+            if word in ("FEDTO", "DEPTH"):
+                c["depth"] = abs(v) * self.scale
+            elif word in ("RAPTO", "CLEAR"):
+                c["clear"] = v * self.scale
+            elif word == "RTRCTO":
+                c["retract"] = v * self.scale
+            elif word in ("MMPM", "IPM"):
+                c["feed"] = v * (25.4 if word == "IPM" else 1.0) / 60.0
+            elif word in ("STEP", "1STPECK"):
+                c["peck"] = abs(v) * self.scale
+            elif word == "SUBPECK":
+                c["subpeck"] = abs(v) * self.scale
+            elif word == "DWELL":
+                c["dwell"] = v
+            else:
+                self.notes.add(f"CYCLE/{kind}: {word} passed over", rec.line)
+            k += 2
+        if "depth" not in c:
+            raise self._error(rec, f"CYCLE/{kind} without its depth FEDTO")
+        c.setdefault("clear", 0.0)
+        if "feed" not in c and not np.isfinite(self.feed):
+            raise self._error(rec, f"CYCLE/{kind} without a feed (MMPM/IPM) and no FEDRAT before")
+        self.cycle = c
+        self.notes.add(
+            "CL drilling cycles expanded as the APT record says: rapid to RAPTO above each "
+            "point, feed FEDTO below it (pecks STEP/1STPECK, SUBPECK with a full retract), "
+            "rapid to RTRCTO (else RAPTO)",
+            rec.line,
+        )
+
+    def _hole(self, line: int, top: NDArray[np.float64]) -> None:
+        """The moves of the active cycle at one hole (top point ``top``, mm)."""
+        c = self.cycle
+        assert c is not None
+        axis = self._axis_now()
+        clear = top + axis * c["clear"]
+        bottom = top - axis * c["depth"]
+        retract = top + axis * max(c.get("retract", c["clear"]), c["clear"])
+        saved = self.feed
+        self.feed = c.get("feed", self.feed)
+        rec = Record(line=line, last=line, word="GOTO", args=[], text="", literal=None, comment=None)
+
+        def rapid(p: NDArray[np.float64]) -> None:
+            self._point(rec, p, None, rapid=True)
+            self.stops.append(self.n - 1)
+
+        def feed(p: NDArray[np.float64]) -> None:
+            self._point(rec, p, None)
+            self.stops.append(self.n - 1)
+
+        rapid(clear)
+        kind = c["kind"]
+        peck = c.get("peck")
+        if kind in ("DEEP", "BRKCHP", "DEEP2") and peck:
+            step = peck
+            reached = -c["clear"]
+            while reached + step < c["depth"]:
+                reached += step
+                feed(top - axis * reached)
+                if kind == "BRKCHP":
+                    pass  # chip breaking: a stop, no retract
+                else:
+                    rapid(clear)
+                    rapid(top - axis * reached)
+                step = c.get("subpeck", peck)
+        feed(bottom)
+        if c.get("dwell", 0.0) > 0:
+            self.dwells.append((self.n - 1, c["dwell"]))
+        if kind in ("TAP", "BORE", "REAM"):
+            feed(clear)
+        rapid(retract)
+        self.feed = saved
 
     def _delay(self, rec: Record) -> None:
         vals, rest = leading_numbers(self.src, rec, "DELAY")

@@ -1,10 +1,18 @@
 """A1 adapter: ISO 6983 G-code as CAM posts write it for Fanuc/ISO, Siemens 840D and LinuxCNC.
 
-Reads the whole file with numpy (:mod:`adapters.gcode.lexer`), then the modal
-state and the moves (:mod:`adapters.gcode.interp`). Anything it cannot
-interpret faithfully -- macros, subprograms, cutter compensation, splines,
-canned cycles, inverse-time feed -- is an error naming the file and line;
-what it assumes is a notice on the tool path.
+Two readers, one result:
+
+* the **vectorised reader** takes programs that are lists of words -- the bulk of CAM
+  output -- with numpy over the whole file (:mod:`adapters.gcode.lexer`, then the modal
+  state and the moves in :mod:`adapters.gcode.interp`);
+* the **full interpreter** (:mod:`adapters.gcode.run`) runs everything else block by block
+  as the controller does: parameters and expressions, control flow, subprograms, canned
+  cycles, work offsets and frames, home returns, cutter compensation, rotary axes.
+
+A program goes to the full interpreter when the vectorised reader finds something it does
+not read (it then stands aside; the full interpreter's verdict is the one reported).
+Anything neither can interpret faithfully is an error naming the file and line; what they
+assume is a notice on the tool path.
 """
 
 from __future__ import annotations
@@ -13,8 +21,10 @@ import os
 import re
 from pathlib import Path
 
-from adapters.gcode.interp import interpret
+from adapters.gcode.control import MachineSetup
+from adapters.gcode.interp import NeedsInterpreter, detect_dialect, detect_dialect_text, interpret
 from adapters.gcode.lexer import Source, tokenize
+from adapters.gcode.run import run_program
 from adapters.gcode.words import DIALECTS
 from adapters.source import GCODE_EXTENSIONS
 from core import ExtractOptions, InputError, ToolPath, UsageError, hookimpl
@@ -26,7 +36,12 @@ _LOOKS_LIKE_GCODE = re.compile(rb"^[ \t]*(?:%|[Nn]\d+[ \t]*)?[GgMm]\d", re.MULTI
 
 
 def read_gcode(
-    data: bytes, name: str, *, dialect: str | None = None, block_delete: bool = False
+    data: bytes,
+    name: str,
+    *,
+    dialect: str | None = None,
+    block_delete: bool = False,
+    setup: MachineSetup | None = None,
 ) -> ToolPath:
     """Parse G-code text (bytes) into a ToolPath.
 
@@ -41,12 +56,39 @@ def read_gcode(
         (Siemens keywords, LinuxCNC ``G64 P``), else Fanuc/ISO.
     block_delete : bool
         Skip blocks starting with "/" (the block-delete switch on).
+    setup : MachineSetup, optional
+        What the machine file says the controller holds before the program runs (home
+        positions, work offsets, tool radii); a program that uses any of it is run by the
+        full interpreter.
     """
     if dialect is not None and dialect not in DIALECTS:
         raise UsageError(f"unknown G-code dialect '{dialect}'; dialects: {', '.join(DIALECTS)}")
+    _refuse_heidenhain(data, name)
     src = Source(name, data)
-    words = tokenize(src)
-    return interpret(src, words, dialect, block_delete)
+    try:
+        words = tokenize(src)
+        d = dialect or detect_dialect(name, words)
+        return interpret(src, words, d, block_delete)
+    except (InputError, NeedsInterpreter):
+        pass
+    d = dialect or detect_dialect_text(name, data)
+    return run_program(name, data, d, block_delete, setup)
+
+
+_HEIDENHAIN = re.compile(rb"^\s*\d*\s*BEGIN\s+PGM\b", re.MULTILINE | re.IGNORECASE)
+
+
+def _refuse_heidenhain(data: bytes, name: str) -> None:
+    """A Heidenhain conversational (Klartext) program is not G-code: one line, exit 1."""
+    m = _HEIDENHAIN.search(data[:65536])
+    if m is None:
+        return
+    line = data.count(b"\n", 0, m.start()) + 1
+    raise InputError(
+        "Heidenhain conversational (Klartext) program: ncperf has no reader for it yet",
+        source=name,
+        line=line,
+    )
 
 
 def _path_of(source: object) -> Path | None:
@@ -66,7 +108,7 @@ def ncperf_extract(source: object, options: ExtractOptions) -> ToolPath | None:
         if suffix not in EXTENSIONS:
             with open(path, "rb") as fh:
                 head = fh.read(4096)
-            if not _LOOKS_LIKE_GCODE.search(head):
+            if not (_LOOKS_LIKE_GCODE.search(head) or _HEIDENHAIN.search(head)):
                 return None
         data = path.read_bytes()
     except IsADirectoryError:

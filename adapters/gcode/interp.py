@@ -9,6 +9,7 @@ Nothing loops over moves in Python.
 from __future__ import annotations
 
 import dataclasses
+import re
 from pathlib import Path
 
 import numpy as np
@@ -26,6 +27,38 @@ AXIS_LETTERS = "XYZ"
 CENTRE_LETTERS = "IJK"
 ALLOWED = set("GMXYZIJKRFPQNSTHDO")
 EXTRA_AXES = set("ABCUVW")
+
+
+class NeedsInterpreter(Exception):
+    """The program needs the full interpreter (adapters.gcode.run), not an error."""
+
+
+#: Constructs that name a dialect, in the text of a program (for the full interpreter,
+#: when the vectorised reader stood aside).
+_SIEMENS_TEXT = re.compile(
+    rb"(?im)^[^;(\n]*(?:\bDEF\s+(?:REAL|INT|BOOL|STRING)\b|\bR\d+\s*=|\bT\s*=\s*\"|"
+    rb"\bMCALL\b|\bCYCLE8\d\b|\bG64[1-5]\b|\bGOTO[FB]\b|\bENDIF\b|\bENDLOOP\b|"
+    rb"\bTRANS\b|\bAROT\b|\bG500\b|\bM17\b|\bPROC\s)"
+)
+_LINUXCNC_TEXT = re.compile(
+    rb"(?im)^\s*(?:n\d+\s*)?o\s*(?:<[^>]*>|\d+)\s*(?:sub|call|if|while|do|repeat)\b|#<|"
+    rb"\bG0?64\s*P"
+)
+_FANUC_TEXT = re.compile(rb"(?im)\bM98\b|\bM99\b|\bG65\b|\bWHILE\s*\[|\bIF\s*\[|\bGOTO\s*\d")
+
+
+def detect_dialect_text(path: str, data: bytes) -> str:
+    """Dialect from the extension, else from the constructs in the text, else Fanuc/ISO."""
+    ext = Path(path).suffix.lower()
+    if ext == ".ngc":
+        return "linuxcnc"
+    if ext in (".mpf", ".spf"):
+        return "siemens"
+    if _SIEMENS_TEXT.search(data):
+        return "siemens"
+    if _LINUXCNC_TEXT.search(data) and not _FANUC_TEXT.search(data):
+        return "linuxcnc"
+    return "fanuc"
 
 
 def detect_dialect(path: str, words: Words) -> str:
@@ -292,6 +325,9 @@ class Interpreter:
             self._dwells(dwell_line)
         home = gg[G.HOME] >= 0
         machine = gg[G.MACHINE_COORDS] >= 0
+        if home.any() or machine.any():
+            # home returns and machine coordinates: the full interpreter models them
+            raise NeedsInterpreter("G28/G30/G53")
 
         given = {}
         for ch in AXIS_LETTERS:

@@ -301,3 +301,43 @@ CONTROL_FLOW = (
 #: and compressors, is the path tolerance of the blocks that follow (like LinuxCNC G64 P).
 SETTINGS = {"CTOL"}
 PASS_ASSIGNMENTS = {"ADIS": "", "ADISPOS": "", "CTOL": "", "OTOL": "", "ATOL": "", "SD": ""}
+
+
+# ----------------------------------------------------------------------------- full interpreter
+def _full(table: dict[int, GCode], dialect: str) -> dict[int, GCode]:
+    """The codes the full interpreter (adapters.gcode.run) runs: the table, with the codes
+    it executes made valid (their group is only a marker there)."""
+    out = dict(table)
+    ok = GCode(Group.PASS)
+    for code in (100, 410, 420, 411, 421, 520, 680, 690, 920, 921, 922, 923, 120, 130, 800):
+        out[code] = ok
+    if dialect != "siemens":
+        for code in (730, 810, 820, 830, 840, 850, 860, 870, 880, 890):
+            out[code] = ok
+        out[740] = ok
+        out[510] = ok
+        out[501] = ok
+        out[511] = ok
+        out[500] = ok
+        if dialect == "fanuc":
+            out[760] = ok
+    for code in (382, 383, 384, 385):
+        out[code] = ok
+    if dialect == "fanuc":
+        out[930] = ok
+    out[280] = ok
+    out[300] = ok
+    out[530] = ok
+    out[310] = ok  # Mach3/Fanuc skip (probe) G31
+    if dialect == "linuxcnc":
+        out[330] = ok  # spindle-synchronised motion
+        out[331] = ok  # rigid tapping
+        out[930] = ok  # inverse-time feed
+        out[52] = GCode(None, "NURBS G5.2 is not supported")
+        out[62] = GCode(None, "NURBS G6.2 is not supported")
+        out[281] = GCode(None, "G28.1 (store home position) is not supported")
+        out[301] = GCode(None, "G30.1 (store home position) is not supported")
+    return out
+
+
+FULL_TABLES = {d: _full(t, d) for d, t in TABLES.items()}
