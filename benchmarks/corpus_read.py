@@ -85,7 +85,9 @@ def main() -> int:
         p for p in args.folder.rglob("*") if p.is_file() and p.suffix.lower() not in SKIP
     )
     print(f"ncperf on {len(files)} files of {args.folder}, {datetime.date.today()}\n")
-    print("| file | system | dialect | result | reason | s |" + (" LinuxCNC |" if args.lcnc else ""))
+    print(
+        "| file | system | dialect | result | reason | s |" + (" LinuxCNC |" if args.lcnc else "")
+    )
     print("|---|---|---|---|---|---|" + ("---|" if args.lcnc else ""))
     per: dict[tuple[str, str], Counter] = defaultdict(Counter)
     total: Counter = Counter()

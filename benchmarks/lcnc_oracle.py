@@ -79,7 +79,11 @@ class MachineCanon:
         self.rot = math.radians(theta)
 
     def machine(self, x, y, z):
-        p = [x * MM_PER_INCH + self.g92[0], y * MM_PER_INCH + self.g92[1], z * MM_PER_INCH + self.g92[2]]
+        p = [
+            x * MM_PER_INCH + self.g92[0],
+            y * MM_PER_INCH + self.g92[1],
+            z * MM_PER_INCH + self.g92[2],
+        ]
         if self.rot:
             c, s = math.cos(self.rot), math.sin(self.rot)
             p[0], p[1] = p[0] * c - p[1] * s, p[0] * s + p[1] * c
@@ -167,8 +171,16 @@ def _read(path, q):
         copy = os.path.join(d, "program.ngc")
         with open(path, errors="replace", newline="") as f, open(copy, "w") as g:
             g.write(_copy_without_tools(f.read()))
+        # o<name> call finds name.ngc in the current folder: copies of the program's
+        # neighbours go there (the interpreter also writes its parameter file there)
+        for name in os.listdir(folder):
+            if name.lower().endswith(".ngc") and name != os.path.basename(path):
+                with open(os.path.join(folder, name), errors="replace", newline="") as f:
+                    text = f.read()
+                with open(os.path.join(d, name), "w") as g:
+                    g.write(_copy_without_tools(text))
         cwd = os.getcwd()
-        os.chdir(folder)  # o<name> call finds name.ngc beside the program
+        os.chdir(d)
         try:
             res, last = gcode.parse(copy, canon, "", "")
         finally:
@@ -239,7 +251,10 @@ def check(exe, path):
         return "diff", f"feed differs from line {d[0]}: {d[2]:.5f} mm vs LinuxCNC's {d[1]:.5f} mm"
     d = first_difference(ref[1], got[1])
     if d:
-        return "rapids", f"rapids differ from line {d[0]}: {d[2]:.4f} mm vs LinuxCNC's {d[1]:.4f} mm"
+        return (
+            "rapids",
+            f"rapids differ from line {d[0]}: {d[2]:.4f} mm vs LinuxCNC's {d[1]:.4f} mm",
+        )
     return "same", f"same path ({len(ref[0]) + len(ref[1])} lines with motion)"
 
 

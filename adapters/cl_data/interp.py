@@ -68,6 +68,8 @@ def _is_number(text: str) -> bool:
     except ValueError:
         return False
     return True
+
+
 PLUS_Z = (0.0, 0.0, 1.0)
 #: cos of the angle within which an arc counts as tangent to (or reversed against) a line:
 #: 2e-3 rad, the tangency tolerance of the curvature model (TOL.tangent_angle).
@@ -609,7 +611,9 @@ class Reader:
         retract = top + axis * max(c.get("retract", c["clear"]), c["clear"])
         saved = self.feed
         self.feed = c.get("feed", self.feed)
-        rec = Record(line=line, last=line, word="GOTO", args=[], text="", literal=None, comment=None)
+        rec = Record(
+            line=line, last=line, word="GOTO", args=[], text="", literal=None, comment=None
+        )
 
         def rapid(p: NDArray[np.float64]) -> None:
             self._point(rec, p, None, rapid=True)

@@ -74,6 +74,8 @@ def strip_comments(text: str, dialect: str, notes: list[str]) -> tuple[str, list
     """(code without comments, the comments' texts). ``( )`` comments (a nested one is read
     as one comment, with a note); ``;`` to the end of the line. Siemens ``( )`` are
     parentheses of expressions and calls, not comments."""
+    if "(" not in text and ")" not in text and ";" not in text and '"' not in text:
+        return text, []
     out: list[str] = []
     comments: list[str] = []
     depth = 0
@@ -138,7 +140,12 @@ def _siemens_comment(before: list[str]) -> bool:
     return last not in _S_EXPR_BEFORE
 
 
+_CONTROL = re.compile(r"[\x00-\x08\x0e-\x1f\x7f]")
+
+
 def _printable(code: str) -> None:
+    if code.isascii() and not _CONTROL.search(code):
+        return
     for ch in code:
         if ord(ch) > 127:
             raise BlockError(f"non-ASCII character {ch!r} outside a comment")
@@ -204,8 +211,33 @@ def _function_at(text: str, pos: int) -> bool:
     return text[pos:j] in E.FUNCTIONS or text[pos:j] in ("ATAN", "EXISTS")
 
 
+#: A line of plain words only (letters and numbers, spaces between): the common case, read
+#: without the expression parser.
+_PLAIN_LINE = re.compile(r"(?:\s*[A-Za-z]\s*[-+]?(?:\d+\.?\d*|\.\d+))+\s*")
+_PLAIN_WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
+
+
+def _plain(text: str, file: int, line: int) -> Block | None:
+    """The block of a plain line, or None when the line needs the full parser."""
+    if not _PLAIN_LINE.fullmatch(text):
+        return None
+    b = Block(file, line)
+    words = [(ch.upper(), float(num)) for ch, num in _PLAIN_WORD.findall(text)]
+    if words and words[0][0] == "N":
+        b.number = words[0][1]
+        words = words[1:]
+    for ch, _ in words:
+        if ch == "O":
+            return None
+    b.words = words
+    return b
+
+
 def parse_linuxcnc(text: str, file: int, line: int) -> Block | None:
     """A LinuxCNC line (rs274ngc: spaces outside comments do not count, case neither)."""
+    fast = _plain(text, file, line)
+    if fast is not None:
+        return fast
     b = Block(file, line)
     code, comments = strip_comments(text, "linuxcnc", b.notes)
     code, b.delete = _head(code)
@@ -296,6 +328,13 @@ def _words(c: E.Cursor, b: Block, parser: E.BracketParser) -> None:
             continue
         if ch == "/":
             raise BlockError("'/' inside a block (block delete must start the line)")
+        if ch == "," and not parser.named and c.text[c.pos + 1 : c.pos + 2] in ("R", "C"):
+            # Fanuc ",R" corner rounding, ",C" chamfer
+            c.pos += 1
+            letter = "," + c.text[c.pos]
+            c.pos += 1
+            b.words.append((letter, parser.value(c)))
+            continue
         if not (ch.isalpha() or (ch in "@^" and parser.named)):
             raise BlockError(f"malformed number or word '{_token(c.text, c.pos)}'")
         c.take(ch)
@@ -311,9 +350,7 @@ def _words(c: E.Cursor, b: Block, parser: E.BracketParser) -> None:
             value = parser.value(c)
         except E.ExprError as exc:
             if nxt in "0123456789.+-":
-                raise BlockError(
-                    f"malformed number '{_token(c.text, start)}' after {ch}"
-                ) from None
+                raise BlockError(f"malformed number '{_token(c.text, start)}' after {ch}") from None
             if nxt.isalpha():
                 raise BlockError(f"unknown word '{ch}{_token(c.text, start)}'") from None
             raise BlockError(f"word {ch}: {exc}") from None
@@ -334,6 +371,9 @@ _F_GOTO = re.compile(r"GOTO")
 
 def parse_fanuc(text: str, file: int, line: int) -> Block | None:
     """A Fanuc (Custom Macro B) line."""
+    fast = _plain(text, file, line)
+    if fast is not None:
+        return fast
     b = Block(file, line)
     if text.lstrip().startswith("$"):
         b.notes.append("'$' header line (Okuma, Mitsubishi file name) ignored")
@@ -440,7 +480,6 @@ class SiemensParser:
         if m:
             b.number = float(m.group(1) or m.group(2))
             up = up[m.end() :]
-            code = code.strip()[m.end() :] if False else code  # raw text only for quoting
         m = _S_LABEL.match(up)
         if m:
             b.label = m.group(1)
@@ -595,6 +634,9 @@ class SiemensParser:
                 name, _, rhs = part.partition("=")
                 self._assign(name.strip(), rhs.strip(), b)
                 continue
+            if re.fullmatch(r"L\d+", part):
+                b.stmt = ("call", part, None, [])  # subprogram L<number>
+                continue
             m = _S_WORD.fullmatch(part)
             if m:
                 b.words.append((m.group(1), float(m.group(2))))
@@ -695,7 +737,9 @@ class SiemensParser:
 
 def _split_top(text: str, sep: str) -> list[str]:
     """Split at ``sep`` outside parentheses and strings."""
-    out, depth, cur, in_str = [], 0, [], False
+    out: list[str] = []
+    cur: list[str] = []
+    depth, in_str = 0, False
     for ch in text:
         if ch == '"':
             in_str = not in_str
@@ -716,8 +760,9 @@ def _split_top(text: str, sep: str) -> list[str]:
 def _split_words(up: str) -> list[str]:
     """Siemens words: separated by spaces outside parentheses and strings; ``X = 5`` is one
     word; letter-number words written together (``G1X10Y5``) are split."""
-    raw = []
-    depth, cur, in_str = 0, [], False
+    raw: list[str] = []
+    cur: list[str] = []
+    depth, in_str = 0, False
     for ch in up:
         if ch == '"':
             in_str = not in_str

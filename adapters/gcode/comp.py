@@ -24,13 +24,15 @@ from __future__ import annotations
 import math
 from typing import TYPE_CHECKING, Any
 
+from core.model.tolerances import TOL
+
 if TYPE_CHECKING:
     from adapters.gcode.control import Controller
 
 Vec = tuple[float, float, float]
 PLANES = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}
 #: In-plane lengths (mm) below this are no direction (a move along the plane's normal).
-FLAT = 1e-9
+FLAT = TOL.direction
 
 
 class CompError(Exception):
@@ -114,9 +116,7 @@ class Compensator:
             pu, pv = self._uv(end)
             dist = math.hypot(pu - cu, pv - cv)
             if dist <= R:
-                raise CompError(
-                    "cutter compensation entry move is not longer than the tool radius"
-                )
+                raise CompError("cutter compensation entry move is not longer than the tool radius")
             nu, nv = self._normal_of(pu - cu, pv - cv)
             # queued, not emitted: a concave corner after it moves its end point
             self.pending = {
@@ -160,7 +160,6 @@ class Compensator:
         self.prog = end
 
     def arc(self, kind: int, end: Vec, centre: Vec, normal: Vec, turns: int, rot_end: Vec) -> None:
-        ctl = self.ctl
         if self.first:
             raise CompError("cutter compensation entry move must be a straight line, not an arc")
         assert self.prog is not None
@@ -217,7 +216,7 @@ class Compensator:
             cross = prev_dir[0] * el["dir0"][1] - prev_dir[1] * el["dir0"][0]
             convex = cross * self.side < 0  # the path turns away from the tool's side
             x = None if convex or prev is None else _intersection(prev, el, cur)
-            if x is not None:
+            if x is not None and prev is not None:
                 prev["end"] = x
                 el["start"] = x
             else:
@@ -267,8 +266,8 @@ def _intersection(a: dict[str, Any], b: dict[str, Any], near: tuple[float, float
         p, r = a["start"], (a["end"][0] - a["start"][0], a["end"][1] - a["start"][1])
         q, s = b["start"], (b["end"][0] - b["start"][0], b["end"][1] - b["start"][1])
         den = r[0] * s[1] - r[1] * s[0]
-        if abs(den) < 1e-15:
-            return None
+        if abs(den) <= TOL.float_slack * math.hypot(*r) * math.hypot(*s):
+            return None  # parallel
         t = ((q[0] - p[0]) * s[1] - (q[1] - p[1]) * s[0]) / den
         return (p[0] + t * r[0], p[1] + t * r[1])
     pts: list[tuple[float, float]] = []

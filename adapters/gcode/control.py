@@ -23,10 +23,14 @@ from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
 
+import numpy as np
+
 from adapters.gcode import words as W
 from adapters.gcode.comp import Compensator
+from adapters.gcode.interp import State
 from core.model.errors import Notes
 from core.model.tolerances import TOL
+from core.model.toolpath import PathMode
 
 INCH = 25.4
 Vec = tuple[float, float, float]
@@ -101,6 +105,10 @@ class Move:
     rot_end: Vec = ORIGIN
     op: int = 0
     inverse: float = math.nan  # G93: the move takes 1 / inverse minutes
+
+
+def _vec(a: Any) -> Vec:
+    return (float(a[0]), float(a[1]), float(a[2]))
 
 
 def _add(a: Vec, b: Vec) -> Vec:
@@ -221,6 +229,9 @@ class Controller:
         self.notes = notes
         self.params = params  # the runner's parameter store (LinuxCNC #5220...)
         self.moves: list[Move] = []
+        #: runs of plain lines read by the vectorised reader: (index in moves they come
+        #: before, their columns)
+        self.segments: list[tuple[int, dict[str, Any]]] = []
         # modal state
         self.units = 210 if dialect != "siemens" else 710
         self.units_set = False
@@ -258,8 +269,7 @@ class Controller:
         self.mcall: tuple | None = None
         self.spindle_cw: bool | None = None
         # position
-        self.pos: Vec = setup.home if dialect == "linuxcnc" else ORIGIN  # machine, mm
-        self.pos = ORIGIN
+        self.pos: Vec = ORIGIN  # machine coordinates, mm
         self.rot: Vec = ORIGIN
         self.rot_offset: Vec = ORIGIN  # G92 on rotary axes: machine - program angle
         self.known = [False, False, False]
@@ -270,9 +280,9 @@ class Controller:
         self.op = 0
         self.ended = False
         self._frame_cache: Frame | None = None
-        self.seen_feed = False
         self.ops_changes: list[int] = []
         self.probed: Vec | None = None
+        self.corner: tuple[int, str, float] | None = None  # a Fanuc ,R/,C waiting
         self._system_parameters()
 
     def _system_parameters(self) -> None:
@@ -294,7 +304,7 @@ class Controller:
         if self.dialect == "linuxcnc":
             for k in range(3):
                 prov[5420 + k] = pos(k)
-                prov[5211 + k] = (lambda k=k: self.g92[k] / self.scale)
+                prov[5211 + k] = lambda k=k: self.g92[k] / self.scale
                 prov[5061 + k] = probe(k)
             prov[5400] = lambda: float(self.tool)
             prov[5070] = lambda: 1.0 if self.probed is not None else 0.0
@@ -376,6 +386,98 @@ class Controller:
         """The current point in program coordinates (mm)."""
         return self.frame().inverse(self.pos)
 
+    # ------------------------------------------------------------------ runs of plain lines
+    def plain_state(self) -> State | None:
+        """The state to hand a run of plain lines to the vectorised reader with, or None when
+        the controller is in a state that reader does not model (see adapters.gcode.plain)."""
+        if (
+            self.dialect not in ("linuxcnc", "fanuc")
+            or self.comp.side != 0
+            or self.comp.pending is not None
+            or self.canned is not None
+            or self.corner is not None
+            or self.mcall is not None
+            or self.inverse_time
+            or self.units not in (200, 210)
+            or self.motion not in (None, 0, 10, 20, 30)
+        ):
+            return None
+        fr = self.frame()
+        if fr.m is not None:
+            return None
+        p = fr.inverse(self.pos)
+        pm = self.path_mode
+        if pm is None:
+            pm = 610 if self._path_exact() else 640
+        return State(
+            motion=-1 if self.motion is None else self.motion,
+            plane=self.plane,
+            distance=900 if self.absolute else 910,
+            arc_distance=901 if self.arc_absolute else 911,
+            units=self.units,
+            path_mode=pm,
+            tolerance=self.tolerance,
+            feed=math.nan if self.feed is None else self.feed,
+            pos=p,
+            known=(self.known[0], self.known[1], self.known[2]),
+        )
+
+    def take_run(self, cols: dict | None, final: State, file: int, call: int) -> None:
+        """The moves and the end state of a run of plain lines read by the vectorised reader
+        (program coordinates): moved to machine coordinates and appended, the last as a
+        :class:`Move` so that what follows (a dwell, a stop) can still reach it."""
+        t = self.frame().t
+        if cols is not None:
+            n = cols["kind"].size
+            shift = np.array(t, dtype=np.float64)
+            cols["start"] = cols["start"] + shift
+            cols["end"] = cols["end"] + shift
+            arc = cols["kind"] >= 2
+            cols["center"] = np.where(arc[:, None], cols["center"] + shift, cols["center"])
+            cols["tool"] = np.full(n, self.tool, dtype=np.int32)
+            cols["file"] = file
+            cols["call"] = call
+            cols["op"] = self.op
+            if n > 1:
+                head = {k: v[:-1] if isinstance(v, np.ndarray) else v for k, v in cols.items()}
+                self.segments.append((len(self.moves), head))
+            k = n - 1
+            kind = int(cols["kind"][k])
+            self.moves.append(
+                Move(
+                    kind=kind,
+                    start=_vec(cols["start"][k]),
+                    end=_vec(cols["end"][k]),
+                    feed=float(cols["feed"][k]),
+                    line=int(cols["line"][k]) - 1,
+                    file=file,
+                    call=call,
+                    exact=bool(cols["path_mode"][k] == PathMode.EXACT_STOP),
+                    tolerance=float(cols["tolerance"][k]),
+                    tool=self.tool,
+                    block=int(cols["block"][k]),
+                    center=_vec(cols["center"][k]) if kind >= 2 else None,
+                    normal=_vec(cols["normal"][k]) if kind >= 2 else None,
+                    rot_start=self.rot,
+                    rot_end=self.rot,
+                    op=self.op,
+                )
+            )
+        self.motion = None if final.motion in (-1, 800) else final.motion
+        self.plane = final.plane
+        self.absolute = final.distance == 900
+        self.arc_absolute = final.arc_distance == 901
+        if final.units_set:
+            self.units = final.units
+            self.units_set = True
+        if final.path_mode_set:
+            self.path_mode = final.path_mode
+        self.tolerance = final.tolerance
+        if final.feed == final.feed:
+            self.feed = final.feed
+        self.pos = self.frame().apply(final.pos)
+        self.known = list(final.known)
+
     # ------------------------------------------------------------------ words
     def block(self, words: dict[str, Any], extra: dict[str, Any]) -> None:
         """Execute one block (words: letter -> value, "G" and "M" -> lists of codes x 10
@@ -407,9 +509,7 @@ class Controller:
                 raise ControlError("two G-codes of the same modal group in one block")
             seen[group] = code
         motion = seen.get("motion", self.motion if self.canned is None else None)
-        cycle = seen.get("cycle", self.canned) if not lc else (
-            motion if motion in CYCLES else None
-        )
+        cycle = seen.get("cycle", self.canned) if not lc else (motion if motion in CYCLES else None)
         if lc and "motion" not in seen and self.canned is not None:
             cycle = self.canned
         arc = motion in (20, 30) and cycle is None
@@ -426,6 +526,8 @@ class Controller:
                 uses |= set("IJ")
         if motion in (330, 331):
             uses.add("K")
+        if motion == 10 and cycle is None and self.dialect == "fanuc":
+            uses.add("R")  # corner rounding on a line
         for code in g:
             if code == 40:
                 uses |= set("PX") | ({"F", "S"} if self.dialect == "siemens" else set())
@@ -450,10 +552,14 @@ class Controller:
         for letter in words:
             if letter in ("G", "M") or letter in "NFSTDHXYZABC@^":
                 continue
+            if letter in (",R", ",C"):
+                if motion != 10 or cycle is not None:
+                    raise ControlError(
+                        f"{letter} (corner rounding, chamfer) on a block that is not a line"
+                    )
+                continue
             if letter in "UVW":
-                raise ControlError(
-                    f"axis word {letter}: only X, Y, Z and A, B, C are supported"
-                )
+                raise ControlError(f"axis word {letter}: only X, Y, Z and A, B, C are supported")
             if letter not in "IJKRPQL":
                 raise ControlError(f"unknown word {letter}")
             if letter not in uses:
@@ -539,10 +645,11 @@ class Controller:
         for code in g:
             if code in (610, 611, 640, 600) or 6410 <= code <= 6450:
                 self.path_mode = code
-                if code == 640 and d == "linuxcnc":
-                    p = words.get("P")
+                if d == "linuxcnc":
+                    # G64 P sets the path tolerance; G64 alone and G61 clear it
+                    p = words.get("P") if code == 640 else None
                     self.tolerance = p * self.scale if p is not None and p > 0 else math.nan
-                    if words.get("Q", 0.0) > 0:
+                    if code == 640 and words.get("Q", 0.0) > 0:
                         self.notes.add(
                             "G64 Q: LinuxCNC may merge collinear G1 blocks within Q; ncperf "
                             "predicts every block",
@@ -640,9 +747,11 @@ class Controller:
             raise ControlError("G10 without an L word")
         lv = int(lv)
         if lv in (2, 20):
-            p = int(words.get("P", 0) + 0.0001)
+            p = round(words.get("P", 0))
             if self.dialect == "fanuc" and p == 0:
-                self.notes.add("G10 L2 P0 (external work offset) applied to every system", self.line)
+                self.notes.add(
+                    "G10 L2 P0 (external work offset) applied to every system", self.line
+                )
             code = self.wcs if p == 0 else 530 + 10 * p if 1 <= p <= 6 else 5400 + p
             if self.dialect == "linuxcnc" and 7 <= p <= 9:
                 code = {7: 591, 8: 592, 9: 593}[p]
@@ -818,8 +927,11 @@ class Controller:
             tol = args[0] if args and args[0] is not None else None
             if tol is not None and tol > 0:
                 self.tolerance = tol * self.scale
-            self.notes.add("CYCLE832 (high-speed settings): its tolerance taken as the path "
-                           "tolerance; its smoothing is the machine's", self.line)
+            self.notes.add(
+                "CYCLE832 (high-speed settings): its tolerance taken as the path "
+                "tolerance; its smoothing is the machine's",
+                self.line,
+            )
         if "pattern" in extra:
             self._pattern(*extra["pattern"])
             return
@@ -850,7 +962,9 @@ class Controller:
             raise ControlError("axis words without a motion mode (G0, G1, G2 or G3)")
         unknown = "".join(a for a, k in zip("XYZ", self.known, strict=True) if not k)
         if unknown and self.motion != 0:
-            self.notes.add(f"feed move starts before {unknown} was programmed: 0 assumed", self.line)
+            self.notes.add(
+                f"feed move starts before {unknown} was programmed: 0 assumed", self.line
+            )
             self.known = [True, True, True]
         end, rot_end = self._target(words, machine, extra)
         if self.motion in (330, 331):
@@ -867,10 +981,13 @@ class Controller:
         kind = {0: 0, 10: 1, 20: 2, 30: 3}.get(self.motion)
         if kind is None:
             raise ControlError(f"motion mode G{self.motion / 10:g} with axis words")
+        corner = self._corner_word(words, kind)
         if kind <= 1:
             self._emit_line(kind, end, rot_end)
         else:
             self._arc(kind, end, words, rot_end)
+        if corner is not None:
+            self.corner = (len(self.moves) - 1, *corner)
         if self.mcall is not None:
             self._siemens_cycle(*self.mcall)
         if "cycle" in extra:
@@ -920,6 +1037,59 @@ class Controller:
             if self.mcall is not None:
                 self._siemens_cycle(*self.mcall)
 
+    def _corner_word(self, words: dict[str, Any], kind: int) -> tuple[str, float] | None:
+        """Fanuc corner rounding (",R" / R on a G1) and chamfering (",C") at the end of this
+        line: the corner to the next line is rounded or cut."""
+        if ",R" in words or ",C" in words or (kind == 1 and "R" in words):
+            if kind != 1:
+                raise ControlError("corner rounding or chamfer on a block that is not a line")
+            if ",R" in words or "R" in words:
+                return ("R", abs(words.get(",R", words.get("R", 0.0))) * self.scale)
+            return ("C", abs(words[",C"]) * self.scale)
+        return None
+
+    def _round_corner(self, end: Vec) -> None:
+        """Cut the corner the last line left for rounding or chamfering: the line is
+        shortened and a tangent arc (R) or a straight cut (C) joins it to the next line,
+        which starts shortened by as much (Fanuc "optional chamfering and corner R")."""
+        assert self.corner is not None
+        index, how, size = self.corner
+        self.corner = None
+        last = self.moves[index]
+        a, b, c = last.start, last.end, end
+        d1 = _sub(b, a)
+        d2 = _sub(c, b)
+        l1, l2 = math.dist(a, b), math.dist(b, c)
+        if l1 <= TOL.zero_length or l2 <= TOL.zero_length:
+            return
+        u1 = (d1[0] / l1, d1[1] / l1, d1[2] / l1)
+        u2 = (d2[0] / l2, d2[1] / l2, d2[2] / l2)
+        cosb = max(-1.0, min(1.0, u1[0] * u2[0] + u1[1] * u2[1] + u1[2] * u2[2]))
+        beta = math.acos(cosb)
+        if beta <= TOL.collinear_angle:
+            return
+        trim = size * math.tan(beta / 2.0) if how == "R" else size
+        if trim >= min(l1, l2):
+            raise ControlError("corner rounding or chamfer larger than its lines")
+        p1 = _sub(b, (u1[0] * trim, u1[1] * trim, u1[2] * trim))
+        p2 = _add(b, (u2[0] * trim, u2[1] * trim, u2[2] * trim))
+        last.end = p1
+        self.pos = p1
+        if how == "C":
+            self.add(1, p1, p2, self.rot)
+            return
+        # the arc's centre: from p1 towards the inside of the turn, at the radius
+        inward = _sub(u2, u1)
+        n_in = math.sqrt(inward[0] ** 2 + inward[1] ** 2 + inward[2] ** 2)
+        bis = (inward[0] / n_in, inward[1] / n_in, inward[2] / n_in)
+        dist = size / math.cos(beta / 2.0)
+        centre = _add(b, (bis[0] * dist, bis[1] * dist, bis[2] * dist))
+        nx = u1[1] * u2[2] - u1[2] * u2[1]
+        ny = u1[2] * u2[0] - u1[0] * u2[2]
+        nz = u1[0] * u2[1] - u1[1] * u2[0]
+        nn = math.sqrt(nx * nx + ny * ny + nz * nz)
+        self.add(3, p1, p2, self.rot, center=centre, normal=(nx / nn, ny / nn, nz / nn))
+
     def _end_cycle(self) -> None:
         self.canned = None
         self.cycle_initial = None
@@ -968,9 +1138,7 @@ class Controller:
             self.add(1, self.pos, start, self.rot, exact=True)
         self.feed = saved
 
-    def _target(
-        self, words: dict[str, Any], machine: bool, extra: dict
-    ) -> tuple[Vec, Vec]:
+    def _target(self, words: dict[str, Any], machine: bool, extra: dict) -> tuple[Vec, Vec]:
         """Machine coordinates of the block's end point (and the rotary axes, deg)."""
         sc = self.scale
         if machine:
@@ -1027,6 +1195,11 @@ class Controller:
         exact: bool | None = None,
     ) -> None:
         """Append a move (machine coordinates) and make its end the current point."""
+        if self.corner is not None and self.corner[0] == len(self.moves) - 1:
+            if kind != 1:
+                raise ControlError("corner rounding or chamfer before a move that is not a line")
+            self._round_corner(end)
+            start = self.pos
         inverse = math.nan
         if self.inverse_time and kind != 0:
             if not self.inverse_f > 0:
@@ -1063,7 +1236,7 @@ class Controller:
         f = self.frame()
         if f.m is not None:
             s = f.scale()
-            if abs(abs(s) - 1.0) > 1e-12 and not _uniform(f.m):
+            if abs(abs(s) - 1.0) > TOL.float_slack and not _uniform(f.m):
                 raise ControlError("an arc under non-uniform scaling is an ellipse: not supported")
         i, j, nk = PLANES[self.plane]
         start = self.pos
@@ -1089,8 +1262,6 @@ class Controller:
             if self.arc_absolute:
                 cp = [sp[0], sp[1], sp[2]]
                 cp[i], cp[j] = off[i], off[j]
-                if self.dialect == "linuxcnc" and False:
-                    pass
             else:
                 cp = [sp[0] + off[0], sp[1] + off[1], sp[2] + off[2]]
             cp[nk] = sp[nk]
@@ -1150,8 +1321,6 @@ class Controller:
     def _stops(self, m: list[int]) -> None:
         if any(c in W.M_STOP for c in m) and self.moves:
             self.moves[-1].exact = True
-        if 9 in [0]:  # pragma: no cover
-            pass
 
     def exact_block(self) -> None:
         """G9 on the block: the block's last move ends at rest."""
@@ -1192,7 +1361,7 @@ class Controller:
         repeats = int(words.get("L", words.get("K", 1) if self.dialect == "fanuc" else 1))
         if repeats < 0:
             raise ControlError("a canned cycle cannot repeat a negative number of times")
-        old = self.cycle_initial
+        old = here[nk] if self.cycle_initial is None else self.cycle_initial
         if self.absolute:
             r = cy["r"]
             bottom = cy["z"]
@@ -1229,9 +1398,8 @@ class Controller:
                 cur = r
             clear = r if self.retract_r_plane else old
         else:
-            clear = r if self.retract_r_plane else max(old, r) if False else old
-            if not self.retract_r_plane and old < r:
-                clear = r
+            # G99: back to R; G98: back to the initial level, or R when that is higher
+            clear = r if self.retract_r_plane else max(old, r)
         for rep in range(max(repeats, 1) if repeats else 0):
             aa += da
             bb += db
@@ -1384,6 +1552,7 @@ class Controller:
         DPR, FDEP, FDPR, DAM, DTB, DTS, FRF, VARI) at the current point (840D programming
         manual, drilling cycles): rapid to RFP + SDIS, feed to the depth (pecking for
         CYCLE83 with VARI = 1, chip breaking with VARI = 0), rapid back to RTP."""
+
         def arg(k: int, default: float | None = None) -> float | None:
             return args[k] if k < len(args) and args[k] is not None else default
 
@@ -1464,7 +1633,7 @@ def _modal_group(code: int, linuxcnc: bool) -> str | None:
 
 def _uniform(m: tuple[Vec, Vec, Vec]) -> bool:
     cols = [math.sqrt(sum(m[r][c] ** 2 for r in range(3))) for c in range(3)]
-    return max(cols) - min(cols) <= 1e-12 * max(cols)
+    return max(cols) - min(cols) <= TOL.float_slack * max(cols)
 
 
 def _r_centre(sp: Vec, ep: Vec, i: int, j: int, nk: int, ccw: bool, r: float) -> Vec:

@@ -489,13 +489,13 @@ def evaluate(node: Node, store: Store, variables: dict[str, float] | None = None
         return min(a, b) if node[1] == "MINVAL" else max(a, b)
     if kind == "bin":
         op = node[1]
-        a = evaluate(node[2], store, variables)
-        b = evaluate(node[3], store, variables)
-        if op in ("EQ", "NE", "==", "<>") and (a is None or b is None):
+        va = evaluate(node[2], store, variables)
+        vb = evaluate(node[3], store, variables)
+        if op in ("EQ", "NE", "==", "<>") and (va is None or vb is None):
             # Fanuc: a vacant variable equals only another vacant one (#0)
-            same = (a is None) == (b is None) and (a is None or a == b)
+            same = (va is None) == (vb is None) and (va is None or va == vb)
             return float(same if op in ("EQ", "==") else not same)
-        result = BINARY[op][1](_num(a), _num(b))
+        result = BINARY[op][1](_num(va), _num(vb))
         if not math.isfinite(result):
             raise ExprError(f"{op} gives a value out of range")
         return result

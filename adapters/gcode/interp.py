@@ -9,6 +9,7 @@ Nothing loops over moves in Python.
 from __future__ import annotations
 
 import dataclasses
+import math
 import re
 from pathlib import Path
 
@@ -92,15 +93,44 @@ def _ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> 
     return np.where(idx >= 0, out, initial)
 
 
+@dataclasses.dataclass
+class State:
+    """The modal state at the start or end of a run of plain lines (G-codes x 10).
+
+    The full interpreter hands long runs of plain lines to this reader with the state it
+    has reached, and takes the state at their end back (:meth:`Interpreter.chunk`)."""
+
+    motion: int  # -1: no motion mode
+    plane: int
+    distance: int
+    arc_distance: int
+    units: int
+    path_mode: int
+    tolerance: float  # mm, NaN: none
+    feed: float  # mm/s, NaN: none
+    pos: tuple[float, float, float]  # program coordinates, mm
+    known: tuple[bool, bool, bool]
+    units_set: bool = False
+    path_mode_set: bool = False
+
+
 class Interpreter:
     """Turns the words of one program into a ToolPath (see module docstring)."""
 
-    def __init__(self, src: Source, words: Words, dialect: str, block_delete: bool) -> None:
+    def __init__(
+        self,
+        src: Source,
+        words: Words,
+        dialect: str,
+        block_delete: bool,
+        initial: State | None = None,
+    ) -> None:
         self.src = src
         self.w = words
         self.dialect = dialect
         self.block_delete = block_delete
         self.notes = Notes(src.name)
+        self.initial = initial
 
     # ------------------------------------------------------------------ helpers
     def error(self, line: int, message: str) -> Exception:
@@ -141,6 +171,51 @@ class Interpreter:
         self._axes()
         self._check_words()
         return self._build()
+
+    def chunk(self) -> tuple[dict | None, State]:
+        """A run of plain lines from :attr:`initial`: the moves' columns (program
+        coordinates; None when the lines move nothing) and the state at the end. Errors are
+        raised as for a whole program; the caller then runs the lines block by block."""
+        init = self.initial
+        assert init is not None
+        w = self.w
+        self._prefilter()
+        if w.line.size == 0:
+            return None, init
+        self.al, self.li = np.unique(w.line, return_inverse=True)
+        self.na = self.al.size
+        self._gcodes()
+        self._mcodes()
+        self._modal()
+        self._axes()
+        self._check_words()
+        G = W.Group
+        fvals, fpres = self.vals["F"], self.pres["F"]
+        if (fpres & (fvals <= 0)).any():
+            raise self.error(self.al[np.argmax(fpres & (fvals <= 0))], "feed F must be positive")
+        feed_line = _ffill(fvals * self.feed_scale, fpres, init.feed)
+        pm = self.g[G.PATH_MODE]
+        final = State(
+            motion=int(self.motion[-1]),
+            plane=int(self.plane[-1]),
+            distance=int(self.distance[-1]),
+            arc_distance=int(self.arc_distance[-1]),
+            units=int(self.units[-1]),
+            path_mode=int(self.path_mode[-1]),
+            tolerance=float(self._tolerance_line()[-1]),
+            feed=float(feed_line[-1]),
+            pos=(float(self.pos[-1, 0]), float(self.pos[-1, 1]), float(self.pos[-1, 2])),
+            known=(
+                bool(self.known[-1, 0]),
+                bool(self.known[-1, 1]),
+                bool(self.known[-1, 2]),
+            ),
+            units_set=bool((self.g[G.UNITS] >= 0).any()),
+            path_mode_set=bool((pm >= 0).any()),
+        )
+        if not self.is_move.any():
+            return None, final
+        return self._columns(np.flatnonzero(self.is_move)), final
 
     def _prefilter(self) -> None:
         """Non-finite numbers, block delete, end of program, letters ncperf does not read."""
@@ -261,21 +336,22 @@ class Interpreter:
             row = gg[group]
             return _ffill(row, row >= 0, initial)
 
-        self.motion = fill(G.MOTION, -1)
-        self.plane = fill(G.PLANE, 170)
-        self.distance = fill(G.DISTANCE, 900)
-        self.arc_distance = fill(G.ARC_DISTANCE, 911)
+        init = self.initial
+        self.motion = fill(G.MOTION, -1 if init is None else init.motion)
+        self.plane = fill(G.PLANE, 170 if init is None else init.plane)
+        self.distance = fill(G.DISTANCE, 900 if init is None else init.distance)
+        self.arc_distance = fill(G.ARC_DISTANCE, 911 if init is None else init.arc_distance)
         units_set = gg[G.UNITS] >= 0
-        if not units_set.any():
+        if not units_set.any() and init is None:
             self.notes.add("no G20/G21 (or G70/G71): millimetres assumed")
-        self.units = fill(G.UNITS, 210)
+        self.units = fill(G.UNITS, 210 if init is None else init.units)
         fm = gg[G.FEED_MODE]
         for code, name in ((930, "G93 inverse-time feed"), (950, "G95 feed per revolution")):
             hit = fm == code
             if hit.any():
                 raise self.error(self.al[np.argmax(hit)], f"{name} is not supported")
-        self.path_mode = fill(G.PATH_MODE, 640)
-        if self.dialect == "siemens" and not (gg[G.PATH_MODE] >= 0).any():
+        self.path_mode = fill(G.PATH_MODE, 640 if init is None else init.path_mode)
+        if self.dialect == "siemens" and not (gg[G.PATH_MODE] >= 0).any() and init is None:
             self.notes.add(
                 "no G64/G641..G645: continuous path assumed (an 840D's default "
                 "may be exact stop G60)"
@@ -376,9 +452,12 @@ class Interpreter:
             csum = np.cumsum(inc)
             last = np.where(abs_set, np.arange(self.na), -1)
             np.maximum.accumulate(last, out=last)
-            base = np.where(last >= 0, mm[np.maximum(last, 0)] - csum[np.maximum(last, 0)], 0.0)
+            before = 0.0 if self.initial is None else self.initial.pos[axis]
+            base = np.where(last >= 0, mm[np.maximum(last, 0)] - csum[np.maximum(last, 0)], before)
             pos[:, axis] = base + csum
             known[:, axis] = np.maximum.accumulate(gvn)
+            if self.initial is not None and self.initial.known[axis]:
+                known[:, axis] = True
         self.pos = pos
         self.known = known
 
@@ -462,85 +541,11 @@ class Interpreter:
 
     # ------------------------------------------------------------------ build
     def _build(self) -> ToolPath:
-        al = self.al
         mi = np.flatnonzero(self.is_move)
         if mi.size == 0:
             raise _no_moves(self.src)
+        cols = self._columns(mi)
         n = mi.size
-        prev = np.concatenate([[np.zeros(3)], self.pos[:-1]])
-        start = prev[mi]
-        end = self.pos[mi]
-        kind = self.kind[mi]
-        cols = empty_columns(n)
-        cols["kind"] = kind.astype(np.int8)
-        cols["start"] = start
-        cols["end"] = end
-        cols["line"] = al[mi] + 1
-        n_vals, n_pres = self.vals["N"], self.pres["N"]
-        cols["block"] = np.where(n_pres[mi], n_vals[mi], -1).astype(np.int64)
-
-        # Unknown start: a feed move before every axis was set.
-        unknown = ~self.known[np.maximum(mi - 1, 0)]
-        unknown[mi == 0] = True
-        feedmove = kind != MoveKind.RAPID
-        bad = feedmove & unknown.any(axis=1)
-        if bad.any():
-            k = int(np.argmax(bad))
-            axes = "".join(a for a, u in zip(AXIS_LETTERS, unknown[k], strict=True) if u)
-            self.notes.add(
-                f"feed move starts before {axes} was programmed: 0 assumed", int(al[mi[k]])
-            )
-
-        # Feed (mm/s), modal.
-        fvals, fpres = self.vals["F"], self.pres["F"] & ~self.consumed["F"]
-        if (fpres & (fvals <= 0)).any():
-            raise self.error(al[np.argmax(fpres & (fvals <= 0))], "feed F must be positive")
-        feed_line = _ffill(fvals * self.feed_scale, fpres, np.nan)
-        feed = feed_line[mi]
-        nofeed = feedmove & np.isnan(feed)
-        if nofeed.any():
-            raise self.error(al[mi[np.argmax(nofeed)]], "feed move without a feed rate F")
-        cols["feed"] = np.where(feedmove, feed, np.nan)
-
-        self._arcs(cols, mi)
-
-        # Path mode: modal exact stop, G9 on the block, M0/M1 after the block.
-        exact_line = np.isin(self.path_mode, W.EXACT_STOP_CODES) | (
-            self.g[W.Group.EXACT_STOP_BLOCK] >= 0
-        )
-        mode = np.where(exact_line[mi], PathMode.EXACT_STOP, PathMode.CONTINUOUS).astype(np.int8)
-        stop_lines = np.flatnonzero(self.m_stop)
-        if stop_lines.size:
-            owner = np.searchsorted(mi, stop_lines, side="right") - 1
-            mode[owner[owner >= 0]] = PathMode.EXACT_STOP
-        cols["path_mode"] = mode
-
-        # Dwell after the last move before (or on) the G4 block.
-        dl = np.flatnonzero(self.dwell_time > 0)
-        if dl.size:
-            owner = np.searchsorted(mi, dl, side="right") - 1
-            dwell = np.zeros(n)
-            np.add.at(dwell, owner[owner >= 0], self.dwell_time[dl[owner >= 0]])
-            if (owner < 0).any():
-                self.notes.add("G4 before the first move ignored", int(al[dl[0]]))
-            cols["dwell"] = dwell
-
-        # Path tolerance from LinuxCNC G64 P.
-        if self.dialect == "linuxcnc":
-            pm = self.g[W.Group.PATH_MODE]
-            setl = pm >= 0
-            tol = np.where((pm == 640) & self.pres["P"], self.vals["P"] * self.scale, np.nan)
-            cols["tolerance"] = _ffill(tol, setl, np.nan)[mi]
-        ctol = [(line, v) for line, name, v in self.w.settings if name == "CTOL"]
-        if ctol:
-            at = np.array([line for line, _ in ctol])
-            val = np.array([v for _, v in ctol])
-            # The last CTOL at or before each move's line, in that line's units.
-            last = np.searchsorted(at, al[mi], side="right") - 1
-            cols["tolerance"] = np.where(
-                last >= 0, val[np.maximum(last, 0)] * self.scale[mi], np.nan
-            )
-
         # Tools and operations.
         tvals, tpres = self.vals["T"], self.pres["T"]
         t_sel = _ffill(tvals, tpres, -1)
@@ -580,6 +585,95 @@ class Interpreter:
         if tp.n == 0:
             raise _no_moves(self.src)
         return dataclasses.replace(tp, notices=self.notes.notices())
+
+    def _tolerance_line(self) -> NDArray[np.float64]:
+        """Per line: the path tolerance in force (mm; LinuxCNC G64 P), NaN for none."""
+        initial = math.nan if self.initial is None else self.initial.tolerance
+        if self.dialect != "linuxcnc":
+            return np.full(self.na, initial)
+        pm = self.g[W.Group.PATH_MODE]
+        p = self.vals["P"]
+        tol = np.where((pm == 640) & self.pres["P"] & (p > 0), p * self.scale, np.nan)
+        return _ffill(tol, pm >= 0, initial)
+
+    def _columns(self, mi: NDArray[np.int64]) -> dict:
+        """The columns of the moves on lines ``mi`` (all but tools and operations)."""
+        al = self.al
+        n = mi.size
+        first = np.zeros(3) if self.initial is None else np.array(self.initial.pos)
+        prev = np.concatenate([[first], self.pos[:-1]])
+        start = prev[mi]
+        end = self.pos[mi]
+        kind = self.kind[mi]
+        cols = empty_columns(n)
+        cols["kind"] = kind.astype(np.int8)
+        cols["start"] = start
+        cols["end"] = end
+        cols["line"] = al[mi] + 1
+        n_vals, n_pres = self.vals["N"], self.pres["N"]
+        cols["block"] = np.where(n_pres[mi], n_vals[mi], -1).astype(np.int64)
+
+        # Unknown start: a feed move before every axis was set.
+        unknown = ~self.known[np.maximum(mi - 1, 0)]
+        unknown[mi == 0] = True if self.initial is None else ~np.array(self.initial.known)
+        feedmove = kind != MoveKind.RAPID
+        bad = feedmove & unknown.any(axis=1)
+        if bad.any():
+            k = int(np.argmax(bad))
+            axes = "".join(a for a, u in zip(AXIS_LETTERS, unknown[k], strict=True) if u)
+            self.notes.add(
+                f"feed move starts before {axes} was programmed: 0 assumed", int(al[mi[k]])
+            )
+
+        # Feed (mm/s), modal.
+        fvals, fpres = self.vals["F"], self.pres["F"] & ~self.consumed["F"]
+        if (fpres & (fvals <= 0)).any():
+            raise self.error(al[np.argmax(fpres & (fvals <= 0))], "feed F must be positive")
+        initial_feed = math.nan if self.initial is None else self.initial.feed
+        feed_line = _ffill(fvals * self.feed_scale, fpres, initial_feed)
+        feed = feed_line[mi]
+        nofeed = feedmove & np.isnan(feed)
+        if nofeed.any():
+            raise self.error(al[mi[np.argmax(nofeed)]], "feed move without a feed rate F")
+        cols["feed"] = np.where(feedmove, feed, np.nan)
+
+        self._arcs(cols, mi)
+
+        # Path mode: modal exact stop, G9 on the block, M0/M1 after the block.
+        exact_line = np.isin(self.path_mode, W.EXACT_STOP_CODES) | (
+            self.g[W.Group.EXACT_STOP_BLOCK] >= 0
+        )
+        mode = np.where(exact_line[mi], PathMode.EXACT_STOP, PathMode.CONTINUOUS).astype(np.int8)
+        stop_lines = np.flatnonzero(self.m_stop)
+        if stop_lines.size:
+            owner = np.searchsorted(mi, stop_lines, side="right") - 1
+            mode[owner[owner >= 0]] = PathMode.EXACT_STOP
+        cols["path_mode"] = mode
+
+        # Dwell after the last move before (or on) the G4 block.
+        dl = np.flatnonzero(self.dwell_time > 0)
+        if dl.size:
+            owner = np.searchsorted(mi, dl, side="right") - 1
+            dwell = np.zeros(n)
+            np.add.at(dwell, owner[owner >= 0], self.dwell_time[dl[owner >= 0]])
+            if (owner < 0).any():
+                self.notes.add("G4 before the first move ignored", int(al[dl[0]]))
+            cols["dwell"] = dwell
+
+        # Path tolerance from LinuxCNC G64 P.
+        if self.dialect == "linuxcnc" or self.initial is not None:
+            cols["tolerance"] = self._tolerance_line()[mi]
+        ctol = [(line, v) for line, name, v in self.w.settings if name == "CTOL"]
+        if ctol:
+            at = np.array([line for line, _ in ctol])
+            val = np.array([v for _, v in ctol])
+            # The last CTOL at or before each move's line, in that line's units.
+            last = np.searchsorted(at, al[mi], side="right") - 1
+            cols["tolerance"] = np.where(
+                last >= 0, val[np.maximum(last, 0)] * self.scale[mi], np.nan
+            )
+
+        return cols
 
     def _arcs(self, cols: dict, mi: NDArray[np.int64]) -> None:
         arc_l = np.flatnonzero(self.arc[mi])

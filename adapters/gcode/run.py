@@ -16,8 +16,6 @@ from __future__ import annotations
 
 import dataclasses
 import math
-import os
-import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -29,9 +27,11 @@ from adapters.gcode import exprs as E
 from adapters.gcode import words as W
 from adapters.gcode.comp import CompError
 from adapters.gcode.control import ControlError, Controller, MachineSetup, Move
+from adapters.gcode.plain import MIN_RUN, PlainRuns
 from adapters.source import Source, check_bytes
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
+from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
 
 #: Most blocks a run may execute (loops included): beyond it the program is taken to loop
@@ -63,6 +63,7 @@ class Unit:
     dialect: str
     blocks: dict[int, B.Block | None] = field(default_factory=dict)
     parser: B.SiemensParser | None = None
+    runs: PlainRuns | None = None  # runs of plain lines (LinuxCNC and Fanuc)
     _structure: dict[str, Any] | None = None
 
     @property
@@ -232,9 +233,11 @@ class Runner:
         setup: MachineSetup,
         block_delete: bool,
         search: list[Path] | None = None,
+        plain_runs: bool = True,
     ) -> None:
         self.dialect = dialect
         self.block_delete = block_delete
+        self.plain_runs = plain_runs and dialect in ("linuxcnc", "fanuc")
         self.notes = Notes(name)
         self.units: list[Unit] = []
         self.main = self._unit(name, data)
@@ -258,6 +261,8 @@ class Runner:
         u = Unit(len(self.units), name, src, self.dialect)
         if self.dialect == "siemens":
             u.parser = B.SiemensParser()
+        elif self.plain_runs:
+            u.runs = PlainRuns(src, self.dialect)
         self.units.append(u)
         return u
 
@@ -269,8 +274,6 @@ class Runner:
     def run(self) -> list[Move]:
         stack = [Frame(self.main, 0, "main")]
         self.stack = stack
-        if self.dialect == "fanuc":
-            self._skip_to_main(stack[0])
         while stack:
             fr = stack[-1]
             if fr.pc >= fr.unit.n:
@@ -278,6 +281,8 @@ class Runner:
                     break
                 continue
             i = fr.pc
+            if fr.unit.runs is not None and self._plain_run(stack, fr, i):
+                continue
             fr.pc += 1
             b = fr.unit.block(i)
             if b is None:
@@ -302,8 +307,33 @@ class Runner:
         self.ctl.comp.flush()
         return self.ctl.moves
 
-    def _skip_to_main(self, fr: Frame) -> None:
-        """Fanuc: the main program starts at the top (its O number, if any, is skipped)."""
+    def _plain_run(self, stack: list[Frame], fr: Frame, i: int) -> bool:
+        """Hand the run of plain lines at line i to the vectorised reader, when there is one
+        worth it and the controller's state allows (:mod:`adapters.gcode.plain`)."""
+        runs = fr.unit.runs
+        assert runs is not None
+        j = runs.run_at(i)
+        if j == i:
+            return False
+        state = self.ctl.plain_state()
+        if state is None or j - i < MIN_RUN:
+            return False
+        try:
+            cols, final, reader = runs.read(i, j, state)
+        except InputError:
+            runs.refused.add(i)  # block by block gives the verdict
+            return False
+        self.executed += j - i
+        if self.executed > MAX_BLOCKS:
+            raise self.error(
+                fr.unit,
+                i,
+                f"more than {MAX_BLOCKS:,} blocks executed: the program loops without end",
+            )
+        self.notes.merge(reader.notes, i)
+        self.ctl.take_run(cols, final, fr.unit.index, stack[-1].call_id)
+        fr.pc = j
+        return True
 
     def _fall_off(self, stack: list[Frame]) -> bool:
         """The end of a file without M2/M30/M99: the main program ends, a subprogram
@@ -333,13 +363,6 @@ class Runner:
                 self.store.scopes.pop()
             if fr.kind == "spf" and len(self.variables) > 1:
                 self.variables.pop()
-
-    def _call_id(self, stack: list[Frame]) -> int:
-        chain = tuple((f.unit.index, f.call_id) for f in stack[1:])
-        if not chain:
-            return -1
-        key = tuple(f.call_id for f in stack[1:])
-        return key[-1]
 
     # ------------------------------------------------------------------ one block
     def _execute(self, stack: list[Frame], fr: Frame, b: B.Block) -> bool:
@@ -401,7 +424,7 @@ class Runner:
                 raise ControlError(f"{letter} word out of range")
             if letter == "G":
                 code = round(v * 10)
-                if abs(v * 10 - code) > 1e-6:
+                if abs(v * 10 - code) > TOL.code_number:
                     raise ControlError(f"unknown G-code G{v:g}")
                 gs.append(code)
             elif letter == "M":
@@ -452,9 +475,7 @@ class Runner:
             self.variables[-1][target[1]] = 0.0 if value is None else value
 
     # ------------------------------------------------------------------ statements
-    def _statement(
-        self, stack: list[Frame], fr: Frame, b: B.Block, s: tuple
-    ) -> tuple[bool, bool]:
+    def _statement(self, stack: list[Frame], fr: Frame, b: B.Block, s: tuple) -> tuple[bool, bool]:
         """(handled, program ends)."""
         kind = s[0]
         if kind == "o":
@@ -529,8 +550,7 @@ class Runner:
             return False
         if kw == "repeat":
             count = int(self._eval(args[0]) or 0)
-            loop = [i, count]
-            fr.loops.append(loop)
+            fr.loops.append([i, count])
             if count <= 0:
                 fr.loops.pop()
                 fr.pc = pairs[i] + 1
@@ -544,10 +564,10 @@ class Runner:
                     fr.loops.pop()
             return False
         if kw in ("break", "continue"):
-            loop = self._enclosing_loop(fr, key, i)
-            if loop is None:
+            around = self._enclosing_loop(fr, key, i)
+            if around is None:
                 raise ControlError(f"o{_show(label)} {kw} outside a loop of that label")
-            start, end = loop
+            start, end = around
             if kw == "break":
                 if fr.loops and fr.loops[-1][0] == start:
                     fr.loops.pop()
@@ -711,12 +731,12 @@ class Runner:
         new = Frame(unit, line + 1, "g65" if 650 in g else "m98", repeats=max(count, 1))
         new.start = line + 1
         if 650 in g:
-            saved = {k: self.store.numbered.get(k) for k in range(1, 34)}
-            for k in range(1, 34):
-                self.store.numbered.pop(k, None)
-            for letter, k in G65_ARGS.items():
+            saved = {n: self.store.numbered.get(n) for n in range(1, 34)}
+            for n in range(1, 34):
+                self.store.numbered.pop(n, None)
+            for letter, number in G65_ARGS.items():
                 if letter in words and letter not in ("P", "L"):
-                    self.store.set(k, words[letter])
+                    self.store.set(number, words[letter])
             new.saved = saved
             self.store.scopes.append({})
         what = f"M98 P{p}" if 98 in m else f"G65 P{p}"
@@ -844,16 +864,13 @@ class Runner:
         return cand[0]
 
 
-def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath:
-    """The moves as a ToolPath (machine coordinates shifted so that the program's first
-    work coordinate system is the origin)."""
-    src = runner.main.src
-    if not moves:
-        raise InputError("no moves (G0, G1, G2, G3) in the program", source=src.name)
+def _move_columns(moves: list[Move]) -> dict[str, Any]:
+    """Columns of Move objects (as the vectorised reader's, plus file, call and op)."""
     n = len(moves)
     cols = empty_columns(n)
-    start = np.array([mv.start for mv in moves], dtype=np.float64)
-    end = np.array([mv.end for mv in moves], dtype=np.float64)
+    del cols["op_offsets"]
+    start = np.array([mv.start for mv in moves], dtype=np.float64).reshape(n, 3)
+    end = np.array([mv.end for mv in moves], dtype=np.float64).reshape(n, 3)
     kind = np.array([mv.kind for mv in moves], dtype=np.int8)
     cols["kind"] = kind
     cols["start"] = start
@@ -878,7 +895,48 @@ def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath
         cols["center"][arc] = centre
         cols["normal"][arc] = normal
         cols["sweep"][arc] = sweep
-    op = np.array([mv.op for mv in moves], dtype=np.int64)
+    cols["file"] = np.array([mv.file for mv in moves], dtype=np.int32)
+    cols["call"] = np.array([mv.call for mv in moves], dtype=np.int32)
+    cols["op"] = np.array([mv.op for mv in moves], dtype=np.int64)
+    cols["inverse"] = np.array([mv.inverse for mv in moves], dtype=np.float64)
+    return cols
+
+
+def _spliced(moves: list[Move], segments: list[tuple[int, dict[str, Any]]]) -> dict[str, Any]:
+    """The columns of the moves with the runs read by the vectorised reader put back in
+    their places."""
+    cols = _move_columns(moves)
+    if not segments:
+        return cols
+    pieces: list[dict[str, Any]] = []
+    at = 0
+    for where, seg in segments:
+        pieces.append({k: v[at:where] for k, v in cols.items()})
+        m = seg["kind"].size
+        piece = {k: seg[k] for k in cols if k in seg and isinstance(seg[k], np.ndarray)}
+        piece["file"] = np.full(m, seg["file"], dtype=np.int32)
+        piece["call"] = np.full(m, seg["call"], dtype=np.int32)
+        piece["op"] = np.full(m, seg["op"], dtype=np.int64)
+        piece["inverse"] = np.full(m, np.nan)
+        pieces.append(piece)
+        at = where
+    pieces.append({k: v[at:] for k, v in cols.items()})
+    return {k: np.concatenate([p[k] for p in pieces]) for k in cols}
+
+
+def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath:
+    """The moves as a ToolPath (machine coordinates)."""
+    src = runner.main.src
+    segments = runner.ctl.segments
+    if not moves and not segments:
+        raise InputError("no moves (G0, G1, G2, G3) in the program", source=src.name)
+    every = _spliced(moves, segments)
+    op = every.pop("op")
+    inverse = every.pop("inverse")
+    every.pop("file")
+    every.pop("call")
+    cols = every
+    n = op.size
     change = np.flatnonzero(np.diff(op) != 0) + 1
     offs = np.concatenate([[0], change, [n]]).astype(np.int64)
     names = []
@@ -893,7 +951,6 @@ def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath
         source=src.name,
         units="inch" if units_inch else "mm",
     )
-    inverse = np.array([mv.inverse for mv in moves], dtype=np.float64)
     timed = np.isfinite(inverse)
     if timed.any():
         # G93: each move takes 1 / F minutes, so its feed is its length times F
@@ -916,20 +973,17 @@ def run_program(
     dialect: str,
     block_delete: bool = False,
     setup: MachineSetup | None = None,
+    *,
+    plain_runs: bool = True,
 ) -> ToolPath:
-    """The ToolPath of a program, run by the full interpreter."""
-    runner = Runner(name, data, dialect, setup or MachineSetup(), block_delete)
+    """The ToolPath of a program, run by the full interpreter (``plain_runs=False``: every
+    block by itself, without handing runs of plain lines to the vectorised reader)."""
+    runner = Runner(
+        name, data, dialect, setup or MachineSetup(), block_delete, plain_runs=plain_runs
+    )
     moves = runner.run()
     ctl = runner.ctl
     if not ctl.units_set:
         runner.notes.add("no G20/G21 (or G70/G71): millimetres assumed")
     tp = to_toolpath(runner, moves, ctl.scale != 1.0)
     return dataclasses.replace(tp, notices=runner.notes.notices())
-
-
-def _env_search() -> list[Path]:
-    raw = os.environ.get("NCPERF_SUBROUTINE_PATH", "")
-    return [Path(p) for p in raw.split(os.pathsep) if p]
-
-
-_ = re  # re is used by the dialect front ends through blocks

@@ -122,6 +122,11 @@ class Notes:
             self._first[message] = None if line is None else line + 1
         self._count[message] += count
 
+    def merge(self, other: Notes, offset: int = 0) -> None:
+        """Add another collection's notes, their lines moved down by ``offset``."""
+        for message, line in other._first.items():
+            self.add(message, None if line is None else line - 1 + offset, other._count[message])
+
     def notices(self) -> tuple[Notice, ...]:
         return tuple(
             Notice(self.source, ln, msg, self._count[msg]) for msg, ln in self._first.items()
