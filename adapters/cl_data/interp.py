@@ -55,7 +55,14 @@ from adapters.cl_data.source import FastGotos, Source
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
 from core.model.tolerances import TOL
-from core.model.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
+from core.model.toolpath import (
+    POINTS_DROPPED,
+    MoveKind,
+    PathMode,
+    ToolPath,
+    drop_zero_length,
+    empty_columns,
+)
 
 INCH = 25.4
 #: CL drilling cycles ncperf expands (APT CYCLE/ records; NX and SolidWorks CAM write them).
@@ -743,9 +750,7 @@ class Reader:
         self._direction_check(tp)
         tp, removed = drop_zero_length(tp)
         if removed.size:
-            self.notes.add(
-                "zero-length moves dropped", int(cols["line"][removed[0]]) - 1, int(removed.size)
-            )
+            self.notes.add(POINTS_DROPPED, int(cols["line"][removed[0]]) - 1, int(removed.size))
         if tp.n == 0:
             raise InputError("no moves of nonzero length in the CL data", source=src.name)
         return dataclasses.replace(tp, notices=self.notes.notices())

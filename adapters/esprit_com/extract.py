@@ -25,7 +25,13 @@ from adapters.esprit_com.object_model import ComObject
 from core.model import geometry as g
 from core.model.errors import InputError, Notice
 from core.model.tolerances import TOL
-from core.model.toolpath import MoveKind, ToolPath, drop_zero_length, empty_columns
+from core.model.toolpath import (
+    POINTS_DROPPED,
+    MoveKind,
+    ToolPath,
+    drop_zero_length,
+    empty_columns,
+)
 
 SCOPES = ("auto", "selected", "all")
 PER_MIN = 60.0
@@ -383,7 +389,5 @@ def read_esprit(source: object) -> ToolPath:
     tp, removed = drop_zero_length(tp)
     if removed.size:
         k = int(removed[0])
-        notes.append(
-            Notice(label, int(cols["line"][k]), "zero-length move dropped", count=int(removed.size))
-        )
+        notes.append(Notice(label, int(cols["line"][k]), POINTS_DROPPED, count=int(removed.size)))
     return replace(tp, notices=tuple(notes))

@@ -21,7 +21,14 @@ from adapters.gcode.lexer import Source, Words
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
 from core.model.tolerances import TOL
-from core.model.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
+from core.model.toolpath import (
+    POINTS_DROPPED,
+    MoveKind,
+    PathMode,
+    ToolPath,
+    drop_zero_length,
+    empty_columns,
+)
 
 INCH = 25.4
 AXIS_LETTERS = "XYZ"
@@ -579,9 +586,7 @@ class Interpreter:
         )
         tp, removed = drop_zero_length(tp)
         if removed.size:
-            self.notes.add(
-                "zero-length moves dropped", int(cols["line"][removed[0]] - 1), int(removed.size)
-            )
+            self.notes.add(POINTS_DROPPED, int(cols["line"][removed[0]] - 1), int(removed.size))
         if tp.n == 0:
             raise _no_moves(self.src)
         return dataclasses.replace(tp, notices=self.notes.notices())

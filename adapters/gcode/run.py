@@ -32,7 +32,14 @@ from adapters.source import Source, check_bytes
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
 from core.model.tolerances import TOL
-from core.model.toolpath import MoveKind, PathMode, ToolPath, drop_zero_length, empty_columns
+from core.model.toolpath import (
+    POINTS_DROPPED,
+    MoveKind,
+    PathMode,
+    ToolPath,
+    drop_zero_length,
+    empty_columns,
+)
 
 #: Most blocks a run may execute (loops included): beyond it the program is taken to loop
 #: forever. Ten million blocks are about an hour of real machining at 3 ms a block.
@@ -959,9 +966,7 @@ def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath
         tp = dataclasses.replace(tp, feed=feed)
     tp, removed = drop_zero_length(tp)
     if removed.size:
-        runner.notes.add(
-            "zero-length moves dropped", int(cols["line"][removed[0]] - 1), int(removed.size)
-        )
+        runner.notes.add(POINTS_DROPPED, int(cols["line"][removed[0]] - 1), int(removed.size))
     if tp.n == 0:
         raise InputError("no moves (G0, G1, G2, G3) in the program", source=src.name)
     return tp

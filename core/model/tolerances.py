@@ -16,6 +16,12 @@ class Tolerances:
     #: below the finest resolution a CAM post writes (4 decimals in inch = 2.5 um).
     zero_length: float = 1e-6
 
+    #: Moves shorter than this (mm) are points, not blocks: the least command increment of
+    #: ISO controls (Fanuc IS-B 0.001 mm; Siemens 840D MD10200 INT_INCR_PER_MM = 1000).
+    #: A machine cannot move less, so a CAM system's 0.0001 mm corner arc is no block that
+    #: the block cycle time (model 3) could slow down to 0.5 mm/min.
+    resolution: float = 1e-3
+
     #: Direction change (rad) above which a junction is a tangential
     #: discontinuity (model 1). 1e-6 rad is a 1 nm deviation over 1 mm, below
     #: any program's resolution; smaller angles are rounding noise. Model 1

@@ -480,13 +480,19 @@ def polyline(points: ArrayLike, feed: float, *, source: str = "<polyline>") -> T
     return ToolPath(**cols, source=source)
 
 
-def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
-    """Remove moves shorter than :attr:`Tolerances.zero_length` (they carry no direction).
+#: What :func:`drop_zero_length` tells the user it did (adapters add it as a notice).
+POINTS_DROPPED = "moves shorter than the 0.001 mm resolution dropped (points, not blocks)"
 
-    Returns the cleaned path and the indices of the removed moves. A dwell or
-    exact stop on a removed move moves to the move before it.
+
+def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
+    """Remove moves no longer than :attr:`Tolerances.resolution`: points, not blocks.
+
+    Returns the cleaned path and the indices of the removed moves. A dwell or exact stop
+    on a removed move moves to the move before it; a line after removed moves starts where
+    the last kept move ended (the path stays connected; an arc keeps its start, at most a
+    few resolutions away).
     """
-    zero = tp.length <= TOL.zero_length
+    zero = tp.length <= TOL.resolution
     if not zero.any():
         return tp, np.zeros(0, dtype=np.int64)
     keep = ~zero
@@ -500,9 +506,14 @@ def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
     mode = tp.path_mode.copy()
     np.maximum.at(mode, target[has], tp.path_mode[removed[has]])
     offs = np.concatenate([[0], np.cumsum(keep)])[tp.op_offsets].astype(np.int64)
+    start = tp.start.copy()
+    # kept lines right after removed moves: from the end of the last kept move before
+    after = np.flatnonzero(keep[1:] & zero[:-1]) + 1
+    after = after[(tp.kind[after] < MoveKind.ARC_CW) & (last_kept[after - 1] >= 0)]
+    start[after] = tp.end[last_kept[after - 1]]
     cols: dict[str, Any] = {
         "kind": tp.kind[keep],
-        "start": tp.start[keep],
+        "start": start[keep],
         "end": tp.end[keep],
         "center": tp.center[keep],
         "normal": tp.normal[keep],
