@@ -6,6 +6,7 @@ It runs the paper's three tasks in order: A1 extract -> A2 evaluate -> A3 displa
 from __future__ import annotations
 
 import argparse
+import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
@@ -15,7 +16,8 @@ from core.engine.effects import Effect, Setup, setup_for
 from core.engine.indicators import Evaluation, Indicator, combine
 from core.engine.predict import Prediction, predict
 from core.engine.profile import build_profile
-from core.model.errors import UsageError
+from core.engine.rotary import missing_axes
+from core.model.errors import Notice, UsageError
 from core.model.machine import Machine
 from core.model.toolpath import ExtractOptions, ToolPath
 from core.model.trace import Trace, TraceOptions
@@ -77,7 +79,7 @@ class Ncperf:
     def analyze(
         self, source: object, machine: Machine, options: ExtractOptions | None = None
     ) -> Analysis:
-        tp = self.extract(source, options)
+        tp = machine_notes(self.extract(source, options), machine)
         if machine.effects:
             # Effects the machine file switches on are part of its model (issue 5).
             pred = self.predict(tp, setup_for(machine, self.effects()))
@@ -166,3 +168,21 @@ class Ncperf:
             hooks = sorted(c.name for c in self.pm.get_hookcallers(plugin) or [])
             rows.append((str(name), hooks))
         return rows
+
+
+def machine_notes(tp: ToolPath, machine: Machine) -> ToolPath:
+    """The path with what the machine file does not say about it added to its notices
+    (rotary axes the program turns but the file gives no limits for)."""
+    missing = missing_axes(tp, machine)
+    if not missing:
+        return tp
+    axes = ", ".join(missing)
+    tables = ", ".join(f"[axes.{a}]" for a in missing)
+    note = Notice(
+        tp.source,
+        None,
+        f"rotary axis {axes} turns but {machine.source} has no {tables}: its speed and "
+        "acceleration set no limit (rotary-only moves at their programmed rate, rapids "
+        "take no time)",
+    )
+    return dataclasses.replace(tp, notices=(*tp.notices, note))

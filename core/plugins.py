@@ -47,6 +47,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "plugins.ncu_capacity",
     "plugins.exact_stop",
     "plugins.feed_limit",
+    "plugins.rotary",
     *(f"plugins.effects.{name}" for name in BUILTIN_EFFECTS),
 )
 

@@ -5,4 +5,5 @@
 * :mod:`plugins.ncu_capacity` -- model 3, block cycle time (eq. 16)
 * :mod:`plugins.exact_stop` -- exact stops and dwells the program asks for
 * :mod:`plugins.feed_limit` -- no block faster than its axes' feed limits
+* :mod:`plugins.rotary` -- nor faster than its rotary axes can turn
 """

@@ -25,6 +25,7 @@ from adapters.gcode.control import MachineSetup
 from adapters.gcode.interp import NeedsInterpreter, detect_dialect, detect_dialect_text, interpret
 from adapters.gcode.lexer import Source, tokenize
 from adapters.gcode.run import run_program
+from adapters.gcode.setup import machine_setup
 from adapters.gcode.words import DIALECTS
 from adapters.source import GCODE_EXTENSIONS
 from core import ExtractOptions, InputError, ToolPath, UsageError, hookimpl
@@ -65,10 +66,18 @@ def read_gcode(
         raise UsageError(f"unknown G-code dialect '{dialect}'; dialects: {', '.join(DIALECTS)}")
     _refuse_heidenhain(data, name)
     src = Source(name, data)
+    setup = setup or MachineSetup()
     try:
         words = tokenize(src)
         d = dialect or detect_dialect(name, words)
-        return interpret(src, words, d, block_delete)
+        return interpret(
+            src,
+            words,
+            d,
+            block_delete,
+            default_path_mode=setup.default_path_mode,
+            offsets_known=bool(setup.offsets),
+        )
     except (InputError, NeedsInterpreter):
         pass
     d = dialect or detect_dialect_text(name, data)
@@ -115,4 +124,10 @@ def ncperf_extract(source: object, options: ExtractOptions) -> ToolPath | None:
         raise InputError("is a folder, not a program", source=str(path)) from None
     except OSError as exc:
         raise InputError(f"cannot read: {exc.strerror}", source=str(path)) from None
-    return read_gcode(data, str(path), dialect=options.dialect, block_delete=options.block_delete)
+    return read_gcode(
+        data,
+        str(path),
+        dialect=options.dialect,
+        block_delete=options.block_delete,
+        setup=machine_setup(options.setup),
+    )

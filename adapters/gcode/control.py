@@ -71,6 +71,8 @@ class MachineSetup:
         path mode (None: the dialect's default).
     tool_radius_override : float or None
         --tool-radius: the radius of every tool for cutter compensation.
+    search : tuple of str
+        Folders for subprogram files after the program's own.
     """
 
     home: Vec = ORIGIN
@@ -80,6 +82,7 @@ class MachineSetup:
     tool_length: dict[int, float] = field(default_factory=dict)
     default_path_mode: str | None = None
     tool_radius_override: float | None = None
+    search: tuple[str, ...] = ()
 
 
 @dataclass
@@ -105,6 +108,7 @@ class Move:
     rot_end: Vec = ORIGIN
     op: int = 0
     inverse: float = math.nan  # G93: the move takes 1 / inverse minutes
+    feed_unit: float = 1.0  # mm per program unit of F (a rotary move's F is deg/min)
 
 
 def _vec(a: Any) -> Vec:
@@ -232,6 +236,9 @@ class Controller:
         #: runs of plain lines read by the vectorised reader: (index in moves they come
         #: before, their columns)
         self.segments: list[tuple[int, dict[str, Any]]] = []
+        #: the translation of the coordinate system in force at the first move: the tool
+        #: path is drawn in that system (the part's), not in machine coordinates
+        self.origin: Vec | None = None
         # modal state
         self.units = 210 if dialect != "siemens" else 710
         self.units_set = False
@@ -428,6 +435,8 @@ class Controller:
         :class:`Move` so that what follows (a dwell, a stop) can still reach it."""
         t = self.frame().t
         if cols is not None:
+            if self.origin is None:
+                self.origin = t
             n = cols["kind"].size
             shift = np.array(t, dtype=np.float64)
             cols["start"] = cols["start"] + shift
@@ -1200,6 +1209,8 @@ class Controller:
                 raise ControlError("corner rounding or chamfer before a move that is not a line")
             self._round_corner(end)
             start = self.pos
+        if self.origin is None:
+            self.origin = self.frame().t
         inverse = math.nan
         if self.inverse_time and kind != 0:
             if not self.inverse_f > 0:
@@ -1225,6 +1236,7 @@ class Controller:
                 rot_end=rot_end,
                 op=self.op,
                 inverse=inverse,
+                feed_unit=self._feed_scale(),
             )
         )
         self.pos = end

@@ -131,6 +131,9 @@ class Interpreter:
         dialect: str,
         block_delete: bool,
         initial: State | None = None,
+        *,
+        default_path_mode: str | None = None,
+        offsets_known: bool = False,
     ) -> None:
         self.src = src
         self.w = words
@@ -138,6 +141,10 @@ class Interpreter:
         self.block_delete = block_delete
         self.notes = Notes(src.name)
         self.initial = initial
+        self.default_path_mode = default_path_mode
+        #: the machine file gives work offsets: a change of work offset needs the full
+        #: interpreter (alone, one offset is the program's own origin)
+        self.offsets_known = offsets_known
 
     # ------------------------------------------------------------------ helpers
     def error(self, line: int, message: str) -> Exception:
@@ -357,17 +364,19 @@ class Interpreter:
             hit = fm == code
             if hit.any():
                 raise self.error(self.al[np.argmax(hit)], f"{name} is not supported")
-        self.path_mode = fill(G.PATH_MODE, 640 if init is None else init.path_mode)
-        if self.dialect == "siemens" and not (gg[G.PATH_MODE] >= 0).any() and init is None:
-            self.notes.add(
-                "no G64/G641..G645: continuous path assumed (an 840D's default "
-                "may be exact stop G60)"
-            )
+        default = 610 if self.default_path_mode == "exact_stop" else 640
+        self.path_mode = fill(G.PATH_MODE, default if init is None else init.path_mode)
+        if init is None and not (gg[G.PATH_MODE] >= 0).any():
+            note = W.path_mode_note(self.dialect, self.default_path_mode)
+            if note:
+                self.notes.add(note)
         wcs_row = gg[G.WORK_OFFSET]
         wcs_set = np.flatnonzero(wcs_row >= 0)
         if wcs_set.size:
             codes = wcs_row[wcs_set]
             change = np.flatnonzero(codes[1:] != codes[:-1])
+            if change.size and self.offsets_known:
+                raise NeedsInterpreter("work offsets from the machine file")
             if change.size:
                 k = wcs_set[change[0] + 1]
                 self.notes.add(
@@ -804,7 +813,22 @@ def _no_moves(src: Source) -> InputError:
     return InputError("no moves (G0, G1, G2, G3) in the program", source=src.name)
 
 
-def interpret(src: Source, words: Words, dialect: str | None, block_delete: bool) -> ToolPath:
+def interpret(
+    src: Source,
+    words: Words,
+    dialect: str | None,
+    block_delete: bool,
+    *,
+    default_path_mode: str | None = None,
+    offsets_known: bool = False,
+) -> ToolPath:
     """The ToolPath of a tokenised program."""
     d = dialect or detect_dialect(src.name, words)
-    return Interpreter(src, words, d, block_delete).run()
+    return Interpreter(
+        src,
+        words,
+        d,
+        block_delete,
+        default_path_mode=default_path_mode,
+        offsets_known=offsets_known,
+    ).run()

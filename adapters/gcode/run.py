@@ -36,6 +36,7 @@ from core.model.toolpath import (
     POINTS_DROPPED,
     MoveKind,
     PathMode,
+    RotaryMoves,
     ToolPath,
     drop_zero_length,
     empty_columns,
@@ -248,11 +249,12 @@ class Runner:
         self.notes = Notes(name)
         self.units: list[Unit] = []
         self.main = self._unit(name, data)
-        self.search = search or [Path(name).resolve().parent]
+        self.search = search or [Path(name).resolve().parent, *map(Path, setup.search)]
         self.store = E.Store(vacant_zero=dialect != "fanuc")
         self.variables: list[dict[str, float]] = [{}]
         self.ctl = Controller(dialect, setup, self.notes, self.store)
         self.calls: list[str] = []
+        self.call_files: list[str] = []  # per call: the file of its lines ("" the main one)
         self._call_ids: dict[tuple, int] = {}
         self.executed = 0
         if dialect == "linuxcnc":
@@ -633,18 +635,25 @@ class Runner:
         self.store.scopes.append({})
         start, end = target
         new = Frame(unit, start + 1, "sub", end=end, saved=saved)
-        new.call_id = self._register_call(stack, fr, b, f"o{_show(key)} call")
+        new.call_id = self._register_call(stack, fr, b, f"o{_show(key)} call", unit)
         stack.append(new)
 
-    def _register_call(self, stack: list[Frame], fr: Frame, b: B.Block, what: str) -> int:
+    def _register_call(
+        self, stack: list[Frame], fr: Frame, b: B.Block, what: str, callee: Unit
+    ) -> int:
+        """The call chain's number (an index into ``calls``: "part.ngc:12 o<pocket> call >
+        pocket.ngc", the file named when it is not the caller's)."""
         caller = stack[-1].call_id
         text = f"{Path(fr.unit.name).name}:{b.line + 1} {what}"
         if caller >= 0:
             text = f"{self.calls[caller]} > {text}"
-        key = (caller, fr.unit.index, b.line, what)
+        if callee is not fr.unit:
+            text = f"{text} > {Path(callee.name).name}"
+        key = (caller, fr.unit.index, b.line, what, callee.index)
         if key not in self._call_ids:
             self._call_ids[key] = len(self.calls)
             self.calls.append(text)
+            self.call_files.append("" if callee is self.main else Path(callee.name).name)
         return self._call_ids[key]
 
     def _load(self, name: str, b: B.Block) -> Unit:
@@ -747,7 +756,7 @@ class Runner:
             new.saved = saved
             self.store.scopes.append({})
         what = f"M98 P{p}" if 98 in m else f"G65 P{p}"
-        new.call_id = self._register_call(stack, fr, b, what)
+        new.call_id = self._register_call(stack, fr, b, what, unit)
         if count <= 0:
             return False
         stack.append(new)
@@ -845,7 +854,7 @@ class Runner:
                 raise ControlError(f"subprogram calls nested deeper than {MAX_DEPTH}")
             new = Frame(unit, 0, "spf", repeats=reps)
             new.args = [self._eval(a) if a is not None else None for a in s[3]]
-            new.call_id = self._register_call(stack, fr, b, name)
+            new.call_id = self._register_call(stack, fr, b, name, unit)
             self.variables.append({})
             self.store.scopes.append({})
             stack.append(new)
@@ -906,6 +915,10 @@ def _move_columns(moves: list[Move]) -> dict[str, Any]:
     cols["call"] = np.array([mv.call for mv in moves], dtype=np.int32)
     cols["op"] = np.array([mv.op for mv in moves], dtype=np.int64)
     cols["inverse"] = np.array([mv.inverse for mv in moves], dtype=np.float64)
+    cols["rot"] = np.array([mv.rot_end for mv in moves], dtype=np.float64).reshape(n, 3) - np.array(
+        [mv.rot_start for mv in moves], dtype=np.float64
+    ).reshape(n, 3)
+    cols["feed_unit"] = np.array([mv.feed_unit for mv in moves], dtype=np.float64)
     return cols
 
 
@@ -925,25 +938,63 @@ def _spliced(moves: list[Move], segments: list[tuple[int, dict[str, Any]]]) -> d
         piece["call"] = np.full(m, seg["call"], dtype=np.int32)
         piece["op"] = np.full(m, seg["op"], dtype=np.int64)
         piece["inverse"] = np.full(m, np.nan)
+        piece["rot"] = np.zeros((m, 3))
+        piece["feed_unit"] = np.ones(m)
         pieces.append(piece)
         at = where
     pieces.append({k: v[at:] for k, v in cols.items()})
     return {k: np.concatenate([p[k] for p in pieces]) for k in cols}
 
 
+def _rotary_only(every: dict[str, Any], dialect: str) -> RotaryMoves | None:
+    """Take the moves that only turn rotary axes out of the columns (in place)."""
+    rot = every["rot"]
+    turns = (np.abs(rot) > TOL.resolution).any(axis=1)
+    if not turns.any():
+        return None
+    chord = np.linalg.norm(every["end"] - every["start"], axis=1)
+    only = turns & (chord <= TOL.resolution) & (every["kind"] < MoveKind.ARC_CW)
+    if not only.any():
+        return None
+    k = np.flatnonzero(only)
+    amount = np.linalg.norm(rot[k], axis=1)
+    inverse = every["inverse"][k]
+    # F of a rotary-only move is degrees per minute (G94), whatever the length units
+    feed = np.where(
+        np.isfinite(inverse), amount * inverse / 60.0, every["feed"][k] / every["feed_unit"][k]
+    )
+    feed = np.where(every["kind"][k] == MoveKind.RAPID, np.nan, feed)
+    keep = ~only
+    after = np.cumsum(keep)[k] - 1  # the last kept move before each
+    moves = RotaryMoves(after=after, travel=rot[k], feed=feed, line=every["line"][k])
+    for key in list(every):
+        every[key] = every[key][keep]
+    return moves
+
+
 def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath:
-    """The moves as a ToolPath (machine coordinates)."""
+    """The moves as a ToolPath, in the coordinate system in force at the first move (the
+    machine coordinates shifted by that system's offset): the part's coordinates, whatever
+    the offsets, as the vectorised reader gives them."""
     src = runner.main.src
     segments = runner.ctl.segments
     if not moves and not segments:
         raise InputError("no moves (G0, G1, G2, G3) in the program", source=src.name)
     every = _spliced(moves, segments)
+    origin = np.array(runner.ctl.origin or (0.0, 0.0, 0.0))
+    for key in ("start", "end", "center"):
+        every[key] = every[key] - origin
+    rotary_only = _rotary_only(every, runner.dialect)
     op = every.pop("op")
     inverse = every.pop("inverse")
     every.pop("file")
-    every.pop("call")
+    call = every.pop("call")
+    rot = every.pop("rot")
+    every.pop("feed_unit")
     cols = every
     n = op.size
+    if n == 0:
+        raise InputError("no moves of X, Y or Z in the program", source=src.name)
     change = np.flatnonzero(np.diff(op) != 0) + 1
     offs = np.concatenate([[0], change, [n]]).astype(np.int64)
     names = []
@@ -957,6 +1008,11 @@ def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath
         op_names=tuple(names),
         source=src.name,
         units="inch" if units_inch else "mm",
+        origin=call if (call >= 0).any() else None,
+        origins=tuple(runner.calls),
+        origin_files=tuple(runner.call_files),
+        rotary=rot if rot.any() else None,
+        rotary_only=rotary_only,
     )
     timed = np.isfinite(inverse)
     if timed.any():
@@ -964,6 +1020,23 @@ def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath
         feed = tp.feed.copy()
         feed[timed] = tp.length[timed] * inverse[timed] / 60.0
         tp = dataclasses.replace(tp, feed=feed)
+    if tp.rotary is not None and runner.dialect == "fanuc":
+        # Fanuc: with linear and rotary axes together F is the rate along all of them,
+        # degrees counted as millimetres (Fanuc 0i-MF operator's manual, "Feedrate for
+        # rotary axis"): the rate along X, Y, Z is F L / sqrt(L^2 + sum of rotations^2)
+        turn = np.einsum("ij,ij->i", tp.rotary, tp.rotary)
+        comp = tp.is_feed & (turn > 0) & ~timed
+        if comp.any():
+            feed = tp.feed.copy()
+            L = tp.length[comp]
+            feed[comp] *= L / np.sqrt(L * L + turn[comp])
+            tp = dataclasses.replace(tp, feed=feed)
+            runner.notes.add(
+                "moves of linear and rotary axes together: F taken along all axes (Fanuc), "
+                "the feed along X, Y, Z is lower",
+                int(tp.line[np.argmax(comp)]) - 1,
+                int(comp.sum()),
+            )
     tp, removed = drop_zero_length(tp)
     if removed.size:
         runner.notes.add(POINTS_DROPPED, int(cols["line"][removed[0]] - 1), int(removed.size))
@@ -990,5 +1063,9 @@ def run_program(
     ctl = runner.ctl
     if not ctl.units_set:
         runner.notes.add("no G20/G21 (or G70/G71): millimetres assumed")
+    if ctl.path_mode is None:
+        note = W.path_mode_note(dialect, runner.ctl.setup.default_path_mode)
+        if note:
+            runner.notes.add(note)
     tp = to_toolpath(runner, moves, ctl.scale != 1.0)
     return dataclasses.replace(tp, notices=runner.notes.notices())

@@ -204,6 +204,25 @@ UNITS = {
 # M-codes (integer numbers).
 M_STOP = {0, 1}  # program stop, optional stop: the machine comes to rest
 M_END = {2, 30}
+
+
+def path_mode_note(dialect: str, default_path_mode: str | None) -> str | None:
+    """What a program that sets no path mode (G61/G64/G60/G641...) runs in, when it
+    matters: the machine's default exact stop, or a Siemens program on a machine file
+    that does not say."""
+    if default_path_mode == "exact_stop":
+        return (
+            "no path mode in the program (G64...): exact stop at every block end, the "
+            "machine's default (default_path_mode in the machine file)"
+        )
+    if dialect == "siemens" and default_path_mode is None:
+        return (
+            "no G64/G641..G645: continuous path assumed (an 840D powers on in exact stop "
+            "G60; default_path_mode in the machine file says which)"
+        )
+    return None
+
+
 M_TOOL_CHANGE = 6
 M_ERRORS = {
     98: "subprogram call M98 is not supported",

@@ -717,8 +717,9 @@ def _f(x: float) -> str:
 def zone_title(z: Zone) -> str:
     """Tooltip and legend text of a critical zone (feeds in mm/min)."""
     pct = round(100.0 * z.worst_reduction)
+    called = f" (run by {z.origin})" if z.origin else ""
     return (
-        f"zone {z.rank}: lines {z.lines}, worst -{pct} %, "
+        f"zone {z.rank}: lines {z.lines}{called}, worst -{pct} %, "
         f"min feed {z.min_feed * 60.0:.0f} mm/min ({z.cause})"
     )
 

@@ -7,6 +7,8 @@ Exit status: 0 success, 1 bad input (one line ``FILE:LINE: what is wrong``),
 from __future__ import annotations
 
 import argparse
+import dataclasses
+import math
 import os
 import sys
 from importlib import resources
@@ -21,7 +23,13 @@ from core.cli.report import fmt_time, summary, write_json, write_samples
 from core.engine.profile import SAMPLE_DT
 from core.facade import Ncperf
 from core.model.errors import InputError, NcperfError, UsageError
-from core.model.machine import DEFAULT_PRESET, load_preset, preset_names, resolve_machine
+from core.model.machine import (
+    DEFAULT_PRESET,
+    Machine,
+    load_preset,
+    preset_names,
+    resolve_machine,
+)
 from core.model.toolpath import ExtractOptions
 from core.view.targets import VIEWS, ComparisonTarget, FileTarget
 
@@ -132,6 +140,12 @@ def _common(p: argparse.ArgumentParser) -> None:
         action="store_true",
         help="skip blocks starting with '/' (block-delete switch on)",
     )
+    p.add_argument(
+        "--tool-radius",
+        type=float,
+        metavar="MM",
+        help="tool radius for cutter compensation G41/G42 (default: the machine's tool table)",
+    )
 
 
 def _machine(args: argparse.Namespace) -> tuple:
@@ -140,8 +154,13 @@ def _machine(args: argparse.Namespace) -> tuple:
     return machine, note
 
 
-def _options(args: argparse.Namespace) -> ExtractOptions:
-    return ExtractOptions(dialect=args.dialect, block_delete=args.block_delete)
+def _options(args: argparse.Namespace, machine: Machine) -> ExtractOptions:
+    setup = machine.setup
+    if args.tool_radius is not None:
+        if not (math.isfinite(args.tool_radius) and args.tool_radius >= 0):
+            raise UsageError(f"--tool-radius must be a length >= 0 (mm), got {args.tool_radius:g}")
+        setup = dataclasses.replace(setup, tool_radius=args.tool_radius)
+    return ExtractOptions(dialect=args.dialect, block_delete=args.block_delete, setup=setup)
 
 
 def _check_output(path: str | None) -> None:
@@ -168,7 +187,7 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
     for out in (svg, args.json):
         _check_output(out)
     machine, note = _machine(args)
-    analysis = nc.analyze(program, machine, _options(args))
+    analysis = nc.analyze(program, machine, _options(args, machine))
     _print_notices(analysis.toolpath.notices, sys.stderr)
     print(summary(analysis, machine_note=note))
     if svg:
@@ -187,7 +206,7 @@ def cmd_profile(args: argparse.Namespace, nc: Ncperf) -> int:
         raise UsageError(f"--dt must be positive, got {args.dt}")
     _check_output(args.csv)
     machine, note = _machine(args)
-    analysis = nc.analyze(args.program, machine, _options(args))
+    analysis = nc.analyze(args.program, machine, _options(args, machine))
     _print_notices(analysis.toolpath.notices, sys.stderr)
     pr = analysis.profile
     samples = pr.sample(args.dt)
@@ -210,7 +229,7 @@ def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
     machine, note = _machine(args)
     rows, panels = [], []
     for program in args.programs:
-        an = nc.analyze(program, machine, _options(args))
+        an = nc.analyze(program, machine, _options(args, machine))
         _print_notices(an.toolpath.notices, sys.stderr)
         label = Path(program).name
         r = compare_row(label, an)
@@ -249,7 +268,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
         if unknown:
             raise UsageError(f"unknown effect {', '.join(unknown)} (effects: {', '.join(effects)})")
         effects = {k: effects[k] for k in wanted}
-    tp = nc.extract(args.program, _options(args))
+    tp = nc.extract(args.program, _options(args, machine))
     _print_notices(tp.notices, sys.stderr)
     options = TraceOptions(units=args.trace_units, kind=args.trace_kind)
     alignments, labels = [], []

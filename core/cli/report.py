@@ -58,6 +58,12 @@ def summary(an: Analysis, *, machine_note: str = "") -> str:
         f"{'s' if t['operations'] != 1 else ''}"
     )
     lines.append(f"  feed length      {t['feed_length_mm']:,.1f} mm")
+    if t["rotary_moves"] or t["rotary_only_moves"]:
+        lines.append(
+            f"  rotary axes      turn on {t['rotary_moves']:,} moves with X/Y/Z and in "
+            f"{t['rotary_only_moves']:,} moves of their own "
+            f"({fmt_time(t['rotary_only_time_s'])} at rest on the path)"
+        )
     lines.append(
         f"  programmed time  {fmt_time(t['programmed_time_s'])} (feed moves at F; rapids "
         f"{fmt_time(t['rapid_time_s'])} at max feed; dwell {fmt_time(t['dwell_time_s'])})"
@@ -149,6 +155,7 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
         "share_at_90_percent": round(t["share_at_90_percent"], 6),
         "rapid_time_s": round(t["rapid_time_s"], 4),
         "dwell_time_s": round(t["dwell_time_s"], 4),
+        "rotary_only_time_s": round(t["rotary_only_time_s"], 4),
         "below_L_share": round(t["below_L_share"], 6),
         "indicators": list(ev.indicator_names),
         "notices": [str(n) for n in tp.notices],
@@ -157,6 +164,8 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
                 "rank": z.rank,
                 "line_start": z.line_first,
                 "line_end": z.line_last,
+                "file": z.file,
+                "called_by": z.origin,
                 "length_mm": round(z.length, 4),
                 "discontinuities": z.discontinuities,
                 "capped_blocks": z.capped_blocks,

@@ -52,6 +52,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from core.engine import rotary
 from core.engine.indicators import Evaluation
 from core.model.tolerances import TOL
 from core.model.toolpath import PathMode, ToolPath
@@ -195,6 +196,11 @@ class Profile:
         With a jerk limit: the lower speed and whole speed change of the acceleration ramp
         and of the braking ramp each move's phases belong to, and the move's tangential
         acceleration and jerk limits (the S shape of the speed inside ramps).
+    pause : (n,) float, s, or None
+        Time at rest after each move: its dwell and the rotary axes' own moves
+        (:mod:`core.engine.rotary`); None: the dwells alone.
+    lead : float, s
+        Time at rest before the first move (rotary axes turning).
     """
 
     evaluation: Evaluation
@@ -210,21 +216,28 @@ class Profile:
     hold_start_ratio: NDArray[np.float64]
     hold_end_ratio: NDArray[np.float64]
     ramps: tuple[NDArray, ...] | None = None
+    pause: NDArray[np.float64] | None = None
+    lead: float = 0.0
 
     @property
     def toolpath(self) -> ToolPath:
         return self.evaluation.toolpath
 
+    @property
+    def rest(self) -> NDArray[np.float64]:
+        """(n,) time at rest after each move (s): dwells, rotary-only moves."""
+        return self.toolpath.dwell if self.pause is None else self.pause
+
     @cached_property
     def cycle_time(self) -> float:
-        """Predicted cycle time: motion of every move plus dwells (s)."""
-        return float(self.time.sum() + self.toolpath.dwell.sum())
+        """Predicted cycle time: motion of every move plus the rests between (s)."""
+        return float(self.lead + self.time.sum() + self.rest.sum())
 
     @cached_property
     def start_time(self) -> NDArray[np.float64]:
         """(n,) time at which each move starts (s)."""
-        span = self.time + self.toolpath.dwell
-        return np.concatenate([[0.0], np.cumsum(span)[:-1]])
+        span = self.time + self.rest
+        return self.lead + np.concatenate([[0.0], np.cumsum(span)[:-1]])
 
     @cached_property
     def phases(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
@@ -392,12 +405,15 @@ class Profile:
         )
 
 
-def boundary_caps(ev: Evaluation, cap: NDArray[np.float64]) -> NDArray[np.float64]:
+def boundary_caps(
+    ev: Evaluation, cap: NDArray[np.float64], rest: NDArray[np.float64] | None = None
+) -> NDArray[np.float64]:
     """(n + 1,) speed cap at every move boundary (mm/s).
 
     0 at the program's ends and wherever the chain breaks: exact stops (G61/G60/G9, M0/M1),
-    dwells, rapid <-> feed and rapid <-> rapid changes, operation changes. Elsewhere the
-    lower of the two moves' caps and the junction's predicted feed.
+    dwells and other rests (``rest``, s, after each move: rotary-only moves), rapid <-> feed
+    and rapid <-> rapid changes, operation changes. Elsewhere the lower of the two moves'
+    caps and the junction's predicted feed.
     """
     tp = ev.toolpath
     n = tp.n
@@ -407,7 +423,8 @@ def boundary_caps(ev: Evaluation, cap: NDArray[np.float64]) -> NDArray[np.float6
     inner = np.minimum(cap[:-1], cap[1:])
     joined = np.zeros(n - 1, dtype=bool)
     joined[tp.junctions] = True  # feed -> feed within one operation
-    stop = (tp.path_mode[:-1] == PathMode.EXACT_STOP) | (tp.dwell[:-1] > 0)
+    rest = tp.dwell if rest is None else rest
+    stop = (tp.path_mode[:-1] == PathMode.EXACT_STOP) | (rest[:-1] > 0)
     inner = np.where(joined & ~stop, inner, 0.0)
     inner[ev.junction] = np.minimum(inner[ev.junction], ev.junction_feed)
     b[1:-1] = inner
@@ -599,11 +616,18 @@ def build_profile(
     if rapid.any():
         cap[rapid] = m.rapid_speed(tp.tangent_start[rapid])
     acc, jerk = tangential_limits(tp, m.max_acceleration, m.max_jerk)
+    pause: NDArray[np.float64] | None = None
+    lead = 0.0
+    if tp.rotary is not None or tp.rotary_only is not None:
+        _, acc_rot, jerk_rot = rotary.path_caps(tp, m)
+        acc, jerk = np.minimum(acc, acc_rot), np.minimum(jerk, jerk_rot)
+        turning, lead = rotary.pauses(tp, m)
+        pause = tp.dwell + turning
     if arc_factor != 1.0:
         acc = np.where(tp.is_arc, acc * arc_factor, acc)
     if end_factor != 1.0 and tp.n:
         acc[-1] *= end_factor
-    b = boundary_caps(ev, cap)
+    b = boundary_caps(ev, cap, pause)
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
     a_up, a_dn = acc.copy(), acc.copy()
@@ -662,4 +686,6 @@ def build_profile(
         hold_start_ratio=r_start,
         hold_end_ratio=r_end,
         ramps=ramps,
+        pause=pause,
+        lead=lead,
     )

@@ -12,6 +12,23 @@ The TOML file speaks the paper's units (m/min, m/s^2, m/s^3, s, mm); the
     interpolation_time = 0.012         # s, t_int (model 3)
     path_tolerance = 0.01              # mm, TIT (model 1)
     curvature_transition_time = 0.012  # s, dt (model 2)
+
+Optional, for the readers (:mod:`core.model.setup`) and rotary axes::
+
+    [axes.A]                # also [axes.B], [axes.C]: rotary axes, degrees
+    max_feed = 7200.0       # deg/min
+    max_acceleration = 720  # deg/s^2
+    max_jerk = 7200         # deg/s^3 (optional; default inf)
+    [controller]
+    default_path_mode = "exact_stop"   # or "continuous": where the program sets none
+    home = [0.0, 0.0, 0.0]             # mm, G28 position (machine coordinates)
+    home_g30 = [0.0, 0.0, 0.0]         # mm, G30 position
+    tool_table = "tool.tbl"            # LinuxCNC tool table, beside this file
+    subroutine_path = ["subs"]         # folders for subprogram files
+    [offsets]
+    G54 = [100.0, 50.0, -200.0]        # mm, machine coordinates of the work origin
+    [tools]
+    T1 = { diameter = 10.0, length = 50.0 }   # mm
 """
 
 from __future__ import annotations
@@ -20,7 +37,7 @@ import difflib
 import math
 import re
 import tomllib
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
 
@@ -28,8 +45,11 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.model.errors import MachineError, UsageError
+from core.model.setup import PATH_MODES, ControllerSetup, Tool
 
 AXES = ("X", "Y", "Z")
+#: Rotary axes a machine file may add (degrees).
+ROTARY_AXES = ("A", "B", "C")
 
 #: TOML key -> factor from the file's unit to ncperf's internal unit.
 AXIS_KEYS = {
@@ -42,9 +62,23 @@ CONTROLLER_KEYS = {
     "path_tolerance": 1.0,  # mm
     "curvature_transition_time": 1.0,  # s
 }
+#: Rotary axes' keys -> factor to deg/s, deg/s^2, deg/s^3 (max_jerk optional).
+ROTARY_KEYS = {"max_feed": 1.0 / 60.0, "max_acceleration": 1.0, "max_jerk": 1.0}
+#: Optional [controller] keys for the readers (see core.model.setup).
+SETUP_KEYS = ("default_path_mode", "home", "home_g30", "tool_table", "subroutine_path")
 TOP_KEYS = ("name", "axes", "controller")
+OPTIONAL_TOP_KEYS = ("offsets", "tools")
 #: Keys that may be infinite ("no such limit"): LinuxCNC 2.9 has no jerk limit.
 MAY_BE_INFINITE = {"max_jerk"}
+
+
+@dataclass(frozen=True)
+class RotaryAxis:
+    """Limits of a rotary axis (deg/s, deg/s^2, deg/s^3; jerk may be inf)."""
+
+    max_feed: float
+    max_acceleration: float
+    max_jerk: float = math.inf
 
 
 @dataclass(frozen=True, eq=False)
@@ -82,6 +116,10 @@ class Machine:
     normal_acceleration_factor: float = 1.0
     #: Effects the machine file switches on: (name, {param: value}, line of the table).
     effects: tuple[tuple[str, dict[str, float], int | None], ...] = ()
+    #: Rotary axes the file describes ("A", "B", "C").
+    rotary: dict[str, RotaryAxis] = field(default_factory=dict)
+    #: What the controller holds before a program runs (home, offsets, tools...).
+    setup: ControllerSetup = field(default_factory=ControllerSetup)
 
     def __post_init__(self) -> None:
         for key in AXIS_KEYS:
@@ -148,16 +186,24 @@ def _line_of(text: str, key: str, table: str = "") -> int | None:
     return text.count("\n", 0, m.start()) + 1 if m else None
 
 
-def _check_keys(table: dict, expected: tuple[str, ...], name: str, source: str, text: str) -> None:
+def _check_keys(
+    table: dict,
+    expected: tuple[str, ...],
+    name: str,
+    source: str,
+    text: str,
+    optional: tuple[str, ...] = (),
+) -> None:
     """Unknown and missing keys of ``[name]`` ("" for the top level)."""
     where = f"[{name}]" if name else "the file"
+    known = expected + optional
     for key in table:
-        if key not in expected:
-            close = difflib.get_close_matches(key, expected, n=1)
+        if key not in known:
+            close = difflib.get_close_matches(key, known, n=1)
             hint = (
                 f"; did you mean '{close[0]}'?"
                 if close
-                else f"; expected one of {', '.join(expected)}"
+                else f"; expected one of {', '.join(known)}"
             )
             line = _line_of(text, key, name)
             if line is None:  # a sub-table such as [axes.W]
@@ -196,7 +242,7 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
             f"not valid TOML: {msg}", source=source, line=int(m.group(1)) if m else None
         ) from None
     effects = _effects(data.pop("effects", {}), source, text)
-    _check_keys(data, TOP_KEYS, "", source, text)
+    _check_keys(data, TOP_KEYS, "", source, text, OPTIONAL_TOP_KEYS)
     name = data["name"]
     if not isinstance(name, str) or not name.strip():
         raise MachineError(
@@ -205,7 +251,8 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
     axes = data["axes"]
     if not isinstance(axes, dict):
         raise MachineError("'axes' must be a table", source=source, line=_line_of(text, "axes"))
-    _check_keys(axes, AXES, "axes", source, text)
+    _check_keys(axes, AXES, "axes", source, text, ROTARY_AXES)
+    rotary = {ax: _rotary(axes[ax], ax, source, text) for ax in ROTARY_AXES if ax in axes}
     per_axis: dict[str, list[float]] = {k: [] for k in AXIS_KEYS}
     for ax in AXES:
         table = axes[ax]
@@ -220,9 +267,12 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         raise MachineError(
             "'controller' must be a table", source=source, line=_line_of(text, "controller")
         )
-    _check_keys(ctrl, tuple(CONTROLLER_KEYS), "controller", source, text)
+    _check_keys(ctrl, tuple(CONTROLLER_KEYS), "controller", source, text, SETUP_KEYS)
     c = {k: _number(ctrl[k], k, "controller", source, text) * f for k, f in CONTROLLER_KEYS.items()}
+    setup = _setup(ctrl, data.get("offsets", {}), data.get("tools", {}), source, text)
     return Machine(
+        rotary=rotary,
+        setup=setup,
         name=name.strip(),
         max_feed=np.array(per_axis["max_feed"]),
         max_acceleration=np.array(per_axis["max_acceleration"]),
@@ -231,6 +281,115 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         effects=effects,
         **c,
     )
+
+
+def _rotary(table: object, ax: str, source: str, text: str) -> RotaryAxis:
+    tname = f"axes.{ax}"
+    if not isinstance(table, dict):
+        raise MachineError(f"[{tname}] must be a table", source=source)
+    _check_keys(table, ("max_feed", "max_acceleration"), tname, source, text, ("max_jerk",))
+    v = {
+        k: _number(table[k], k, tname, source, text) * f
+        for k, f in ROTARY_KEYS.items()
+        if k in table
+    }
+    return RotaryAxis(**v)
+
+
+def _vec3(value: object, key: str, name: str, source: str, text: str) -> tuple[float, float, float]:
+    line = _line_of(text, key, name)
+    if (
+        not isinstance(value, list)
+        or len(value) != 3
+        or any(isinstance(x, bool) or not isinstance(x, int | float) for x in value)
+        or not all(math.isfinite(float(x)) for x in value)
+    ):
+        raise MachineError(
+            f"'{key}' in [{name}] must be three finite numbers [x, y, z] in mm, got {value!r}",
+            source=source,
+            line=line,
+        )
+    return (float(value[0]), float(value[1]), float(value[2]))
+
+
+_OFFSET_NAME = re.compile(r"G5[4-9](?:\.[1-3])?|G5[0-9]{2}|G54\.1P[0-9]+")
+
+
+def _setup(ctrl: dict, offsets: object, tools: object, source: str, text: str) -> ControllerSetup:
+    """The optional reader settings of a machine file (see core.model.setup)."""
+    mode = ctrl.get("default_path_mode")
+    if mode is not None and mode not in PATH_MODES:
+        raise MachineError(
+            f"'default_path_mode' in [controller] must be one of {', '.join(PATH_MODES)}, "
+            f"got {mode!r}",
+            source=source,
+            line=_line_of(text, "default_path_mode", "controller"),
+        )
+    kw: dict = {"default_path_mode": mode}
+    for key in ("home", "home_g30"):
+        if key in ctrl:
+            kw[key] = _vec3(ctrl[key], key, "controller", source, text)
+    if "tool_table" in ctrl:
+        tt = ctrl["tool_table"]
+        if not isinstance(tt, str) or not tt:
+            raise MachineError(
+                "'tool_table' in [controller] must be a file name",
+                source=source,
+                line=_line_of(text, "tool_table", "controller"),
+            )
+        folder = Path(source).parent if not source.startswith("preset ") else Path(".")
+        kw["tool_table"] = str(folder / tt)
+    if "subroutine_path" in ctrl:
+        sp = ctrl["subroutine_path"]
+        if not isinstance(sp, list) or not all(isinstance(x, str) and x for x in sp):
+            raise MachineError(
+                "'subroutine_path' in [controller] must be a list of folder names",
+                source=source,
+                line=_line_of(text, "subroutine_path", "controller"),
+            )
+        folder = Path(source).parent if not source.startswith("preset ") else Path(".")
+        kw["subroutine_path"] = tuple(str(folder / x) for x in sp)
+    if not isinstance(offsets, dict):
+        raise MachineError("'offsets' must be a table", source=source)
+    wo = {}
+    for name, value in offsets.items():
+        code = name.upper().replace(" ", "")
+        if not _OFFSET_NAME.fullmatch(code):
+            raise MachineError(
+                f"[offsets] key '{name}' is not a work offset (G54 ... G59.3, G505 ...)",
+                source=source,
+                line=_line_of(text, name, "offsets"),
+            )
+        wo[code] = _vec3(value, name, "offsets", source, text)
+    kw["work_offsets"] = wo
+    if not isinstance(tools, dict):
+        raise MachineError("'tools' must be a table", source=source)
+    tt_map = {}
+    for name, value in tools.items():
+        line = _line_of(text, name, "tools")
+        m = re.fullmatch(r"[Tt]?(\d+)", name)
+        if m is None or not isinstance(value, dict):
+            raise MachineError(
+                f"[tools] entries are T<number> = {{ diameter = ..., length = ... }}, got '{name}'",
+                source=source,
+                line=line,
+            )
+        _check_keys(value, (), f"tools.{name}", source, text, ("diameter", "radius", "length"))
+        entry = {}
+        for key in ("diameter", "radius", "length"):
+            if key in value:
+                x = value[key]
+                if isinstance(x, bool) or not isinstance(x, int | float) or not math.isfinite(x):
+                    raise MachineError(
+                        f"'{key}' of tool {name} must be a finite number (mm), got {x!r}",
+                        source=source,
+                        line=line,
+                    )
+                entry[key] = float(x)
+        radius = entry.get("radius", entry["diameter"] / 2 if "diameter" in entry else None)
+        tt_map[int(m.group(1))] = Tool(radius=radius, length=entry.get("length"))
+    kw["tools"] = tt_map
+    return ControllerSetup(**kw)
 
 
 def _effects(table: object, source: str, text: str) -> tuple:

@@ -7,7 +7,7 @@ computed once, vectorised, on first use.
 
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from enum import IntEnum
 from functools import cached_property
 from typing import Any
@@ -18,6 +18,7 @@ from numpy.typing import ArrayLike, NDArray
 from core.model import geometry as g
 from core.model.errors import Notice
 from core.model.sampling import PathSamples
+from core.model.setup import ControllerSetup
 from core.model.tolerances import TOL
 
 
@@ -57,10 +58,14 @@ class ExtractOptions:
         "linuxcnc"); None lets the adapter decide from the file.
     block_delete : bool
         The block-delete switch: True skips blocks starting with "/".
+    setup : ControllerSetup
+        What the controller holds before the program (home, work offsets, tools, default
+        path mode; from the machine file).
     """
 
     dialect: str | None = None
     block_delete: bool = False
+    setup: ControllerSetup = field(default_factory=ControllerSetup)
 
 
 def _column(x: ArrayLike, n: int, name: str, dtype: type) -> NDArray:
@@ -75,6 +80,41 @@ def _points(x: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
     if a.shape != (n, 3):
         raise ValueError(f"{name} must have shape ({n}, 3), got {a.shape}")
     return a
+
+
+@dataclass(frozen=True, eq=False)
+class RotaryMoves:
+    """Moves of the rotary axes alone (A, B, C turn, X, Y, Z stand still): no length on
+    the tool path, so not moves of it; the machine turns between two moves, from rest to
+    rest.
+
+    Attributes
+    ----------
+    after : (m,) int64
+        The tool path move they follow (-1: before the first).
+    travel : (m, 3) float, deg
+        Signed rotation of A, B and C.
+    feed : (m,) float, deg/s
+        Programmed rate along the rotation (all axes together); NaN for rapids.
+    line : (m,) int64
+        1-based source line.
+    """
+
+    after: NDArray[np.int64]
+    travel: NDArray[np.float64]
+    feed: NDArray[np.float64]
+    line: NDArray[np.int64]
+
+    def __post_init__(self) -> None:
+        after = np.ascontiguousarray(self.after, dtype=np.int64)
+        m = after.shape[0]
+        object.__setattr__(self, "after", after)
+        object.__setattr__(self, "travel", _points(self.travel, m, "travel"))
+        object.__setattr__(self, "feed", _column(self.feed, m, "feed", np.float64))
+        object.__setattr__(self, "line", _column(self.line, m, "line", np.int64))
+
+    def __len__(self) -> int:
+        return int(self.after.shape[0])
 
 
 @dataclass(frozen=True, eq=False)
@@ -122,6 +162,19 @@ class ToolPath:
         Tool axis of 5-axis sources; None for 3-axis paths.
     units : str
         Units the source was written in ("mm" or "inch"); the arrays are always mm.
+    origin : (n,) int32 or None
+        Where a move's block was run from: an index into ``origins``, -1 for the main
+        program's own blocks; None when every block is the main program's. ``line`` is the
+        line in the file the origin names.
+    origins : tuple of str
+        The call chains, e.g. "part.ngc:12 o<pocket> call > pocket.ngc".
+    origin_files : tuple of str
+        Per origin, the file its lines are in ("" for the main program's file).
+    rotary : (n, 3) float, deg, or None
+        Signed rotation of the rotary axes A, B, C during each move (they turn with the
+        tool along X, Y, Z: F is the feed along the path); None without rotary axes.
+    rotary_only : RotaryMoves or None
+        Moves of the rotary axes alone, between the moves of the path.
     """
 
     kind: NDArray[np.int8]
@@ -143,6 +196,11 @@ class ToolPath:
     notices: tuple[Notice, ...] = ()
     tool_axis: NDArray[np.float64] | None = None
     units: str = "mm"
+    origin: NDArray[np.int32] | None = None
+    origins: tuple[str, ...] = ()
+    origin_files: tuple[str, ...] = ()
+    rotary: NDArray[np.float64] | None = None
+    rotary_only: RotaryMoves | None = None
 
     def __post_init__(self) -> None:
         kind = np.ascontiguousarray(self.kind, dtype=np.int8)
@@ -180,6 +238,30 @@ class ToolPath:
         set_(self, "op_names", names)
         if self.tool_axis is not None:
             set_(self, "tool_axis", _points(self.tool_axis, n, "tool_axis"))
+        if self.origin is not None:
+            origin = _column(self.origin, n, "origin", np.int32)
+            if origin.size and (origin.min() < -1 or origin.max() >= len(self.origins)):
+                raise ValueError("origin must index origins (or be -1)")
+            set_(self, "origin", origin)
+            set_(self, "origins", tuple(self.origins))
+            files = tuple(self.origin_files) or ("",) * len(self.origins)
+            if len(files) != len(self.origins):
+                raise ValueError("origin_files must have one entry per origin")
+            set_(self, "origin_files", files)
+        if self.rotary is not None:
+            set_(self, "rotary", _points(self.rotary, n, "rotary"))
+        if self.rotary_only is not None:
+            after = self.rotary_only.after
+            if after.size and (after.min() < -1 or after.max() >= n):
+                raise ValueError("rotary_only.after must index the moves (or be -1)")
+
+    def where(self, k: int) -> str:
+        """Move ``k``'s source, for messages and tooltips: "line 12", or "line 3 of
+        part.ngc:12 o<pocket> call > pocket.ngc" for a block run by a call."""
+        line = f"line {int(self.line[k])}"
+        if self.origin is None or self.origin[k] < 0:
+            return line
+        return f"{line} of {self.origins[int(self.origin[k])]}"
 
     # ------------------------------------------------------------------ basics
     def __len__(self) -> int:
@@ -493,6 +575,9 @@ def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
     few resolutions away).
     """
     zero = tp.length <= TOL.resolution
+    if tp.rotary is not None:
+        if (zero & (np.abs(tp.rotary) > TOL.resolution).any(axis=1)).any():
+            raise ValueError("a move that only turns rotary axes belongs in rotary_only")
     if not zero.any():
         return tp, np.zeros(0, dtype=np.int64)
     keep = ~zero
@@ -542,6 +627,21 @@ def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
             notices=tp.notices,
             tool_axis=None if tp.tool_axis is None else tp.tool_axis[keep],
             units=tp.units,
+            origin=None if tp.origin is None else tp.origin[keep],
+            origins=tp.origins,
+            origin_files=tp.origin_files,
+            rotary=None if tp.rotary is None else tp.rotary[keep],
+            rotary_only=_reindexed(tp.rotary_only, keep),
         ),
         removed,
     )
+
+
+def _reindexed(rm: RotaryMoves | None, keep: NDArray[np.bool_]) -> RotaryMoves | None:
+    """Rotary-only moves after some moves were removed: each follows the last kept move at
+    or before the one it followed."""
+    if rm is None:
+        return None
+    new_index = np.cumsum(keep) - 1  # index among the kept moves of the last kept at or before
+    after = np.where(rm.after >= 0, new_index[np.maximum(rm.after, 0)], -1)
+    return RotaryMoves(after=after, travel=rm.travel, feed=rm.feed, line=rm.line)

@@ -74,4 +74,7 @@ def totals(an: Analysis) -> dict[str, float | int]:
         "share_at_90_percent": at_feed_share(an.profile, 0.9),
         "below_L_share": float(tp.length[below].sum() / tp.feed_length) if tp.feed_length else 0.0,
         "blocks_below_L": int(below.sum()),
+        "rotary_moves": 0 if tp.rotary is None else int((tp.rotary != 0).any(axis=1).sum()),
+        "rotary_only_moves": 0 if tp.rotary_only is None else len(tp.rotary_only),
+        "rotary_only_time_s": float(an.profile.lead + an.profile.rest.sum() - tp.dwell.sum()),
     }

@@ -49,6 +49,11 @@ class Zone:
         slow crossing and re-acceleration).
     point : (3,) float, mm
         Where the minimum is (for labels).
+    origin : str
+        The call chain that ran the zone's first block ("" for the main program's own
+        blocks; see :attr:`ToolPath.origins`).
+    file : str
+        The file the lines are in when it is not the main program's ("").
     """
 
     rank: int
@@ -65,11 +70,15 @@ class Zone:
     cause: str
     time_lost: float
     point: tuple[float, float, float]
+    origin: str = ""
+    file: str = ""
 
     @property
     def lines(self) -> str:
+        """ "12-15", or "pocket.ngc:3-5" for lines of another file."""
         a, b = self.line_first, self.line_last
-        return f"{a}" if a == b else f"{a}-{b}"
+        text = f"{a}" if a == b else f"{a}-{b}"
+        return f"{self.file}:{text}" if self.file else text
 
 
 def zone_count(ev: Evaluation, profile: Profile) -> int:
@@ -186,6 +195,8 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
                 cause=cause,
                 time_lost=float(lost[z]),
                 point=(float(point[0]), float(point[1]), float(point[2])),
+                origin="" if tp.origin is None or tp.origin[a] < 0 else tp.origins[tp.origin[a]],
+                file="" if tp.origin is None or tp.origin[a] < 0 else tp.origin_files[tp.origin[a]],
             )
         )
     return tuple(zones)
