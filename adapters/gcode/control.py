@@ -1396,10 +1396,14 @@ class Controller:
             return f.apply((p[0], p[1], p[2]))
 
         def rapid(a: float, b: float, c: float) -> None:
-            self.add(0, self.pos, at(a, b, c), self.rot, exact=True)
+            to = at(a, b, c)
+            if math.dist(to, self.pos) > TOL.zero_length:  # a cycle's step in place is none
+                self.add(0, self.pos, to, self.rot, exact=True)
 
         def feed(a: float, b: float, c: float) -> None:
-            self.add(1, self.pos, at(a, b, c), self.rot, exact=True)
+            to = at(a, b, c)
+            if math.dist(to, self.pos) > TOL.zero_length:
+                self.add(1, self.pos, to, self.rot, exact=True)
 
         cur = here[nk]
         lc = self.dialect == "linuxcnc"
