@@ -489,7 +489,30 @@ def test_zero_length_moves_dropped():
     """A GOTO to the current point is dropped with a notice."""
     tp = read(f"{F600}GOTO/1,0,0\nGOTO/1,0,0\nGOTO/2,0,0\n")
     assert tp.n == 2 and list(tp.line) == [2, 4]
-    assert "zero-length moves dropped" in notices(tp)
+    assert "moves shorter than the 0.001 mm resolution dropped" in notices(tp)
+
+
+def test_drilling_cycles_in_both_apt_forms():
+    """CYCLE/DRILL, d, MMPM, f, c (the APT standard's positional form) and the keyword form
+    (FEDTO, RAPTO, RTRCTO) expand at every GOTO until CYCLE/OFF: rapid to c above the point,
+    feed d below it at f, rapid back (to RTRCTO where given)."""
+    tp = read(f"{F600}GOTO/0,0,10\nCYCLE/DRILL,5,MMPM,120,3\nGOTO/1,0,0\nGOTO/5,0,0\nCYCLE/OFF\n")
+    assert list(tp.kind[1:]) == [0, 1, 0, 0, 1, 0]
+    # hole at (1,0,0): rapid to z = 0 + 3, feed to 0 - 5 at 120 mm/min = 2 mm/s, rapid to 3
+    assert np.allclose(tp.end[1:4], [[1, 0, 3], [1, 0, -5], [1, 0, 3]])
+    assert tp.feed[2] == pytest.approx(2.0)
+    assert np.allclose(tp.end[4:7], [[5, 0, 3], [5, 0, -5], [5, 0, 3]])
+    assert (tp.path_mode[1:] == 1).all()  # every step of a cycle ends at rest
+    tp = read(
+        f"{F600}GOTO/0,0,10\nCYCLE/INIT\nCYCLE/DEEP2,FEDTO,7,1STPECK,3,SUBPECK,2,MMPM,60,"
+        "RAPTO,2,RTRCTO,20\nGOTO/0,0,0\nCYCLE/OFF\nGOTO/0,0,30\n"
+    )
+    # pecks from the RAPTO level (z = 2): 3 mm to z = -1, then 2 mm steps to -3, -5, then -7;
+    # after each peck a rapid to z = 2 and back down to the last depth; retract to z = 20
+    z = tp.end[:, 2]
+    feeds = z[tp.kind == 1][1:-1]  # the first and last feed moves are the GOTOs around it
+    assert np.allclose(feeds, [-1, -3, -5, -7])
+    assert z[-2] == pytest.approx(20.0) and z[-1] == pytest.approx(30.0)
 
 
 def test_cycle_off_alone_passes():
@@ -527,8 +550,9 @@ def test_cycle_off_alone_passes():
         ("RAPID/ON\n", 1, "RAPID/ON not understood"),
         ("MULTAX/MAYBE\n", 1, "MULTAX/MAYBE not understood"),
         (f"{F600}GOTO/1,0,0\nNURBS/\nKNOT/0,1\n", 3, "NURBS/ spline motion is not supported"),
-        (f"{F600}CYCLE/DRILL,5,MMPM,100,3\nGOTO/1,0,0\n", 2, "canned cycles (CYCLE/)"),
-        ("CYCLE/INIT\n", 1, "canned cycles"),
+        (f"{F600}CYCLE/SPIRAL,5\nGOTO/1,0,0\n", 2, "CYCLE/SPIRAL is not a drilling cycle"),
+        (f"{F600}CYCLE/DRILL,RAPTO,3\nGOTO/1,0,0\n", 2, "CYCLE/DRILL without its depth"),
+        (f"{F600}CYCLE/DRILL,5,MMPM,100,3,7\n", 2, "3 numbers where the APT form has 2"),
         (f"{F600}GOFWD/(CIRCLE/0,0,0,5),ON,L1\n", 2, "GOFWD is an APT part-program statement"),
         (f"{F600}INDIRV/1,0,0\n", 2, "INDIRV is an APT part-program statement"),
         ("PT1=POINT/1,2,3\n", 1, "'=' (a geometry definition"),

@@ -18,13 +18,15 @@ READABLE = [
     "nx-clsf/_3_PAZ_125_N2.cls",
     "nx-clsf/ust_a2.cls",
     "solidworks-cam/boss.apt",
+    "solidworks-cam/basemach.apt",
+    "solidworks-cam/wall-holes.apt",
 ]
 # Files with records ncperf refuses, and the first such record (found in the test).
 REFUSED = {
     "nx-clsf/nurbs.clsf": ("NURBS/", "NURBS/ spline motion is not supported"),
-    "solidworks-cam/basemach.apt": ("CYCLE/", "canned cycles (CYCLE/) are not supported"),
-    "solidworks-cam/wall-holes.apt": ("CYCLE/", "canned cycles (CYCLE/) are not supported"),
 }
+#: SolidWorks CAM files with drilling cycles (CYCLE/ ... CYCLE/OFF around GOTO points).
+WITH_CYCLES = ["solidworks-cam/basemach.apt", "solidworks-cam/wall-holes.apt"]
 WITH_ARCS = [
     "nx-clsf/_10_KONTUR_125_N2_162.cls",
     "nx-clsf/_3_PAZ_125_N2.cls",
@@ -65,14 +67,43 @@ def test_real_files_read_into_chained_moves(rel):
 
 @pytest.mark.parametrize("rel", sorted(REFUSED), ids=[r.split("/")[-1] for r in sorted(REFUSED)])
 def test_refused_files_name_the_first_record_ncperf_cannot_read(rel):
-    """nurbs.clsf (NURBS/ splines) and the two SolidWorks files with drilling cycles (CYCLE/)
-    are refused with the line of the first such record."""
+    """nurbs.clsf (NURBS/ splines) is refused with the line of the first such record."""
     p = shared("data", "apt", *rel.split("/"))
     word, message = REFUSED[rel]
     first = next(k for k, t in enumerate(lines_of(p), 1) if t.lstrip().startswith(word))
     with pytest.raises(InputError) as info:
         read_cl(p.read_bytes(), str(p))
     assert str(info.value).startswith(f"{p}:{first}: {message}")
+
+
+@pytest.mark.parametrize("rel", WITH_CYCLES, ids=[r.split("/")[-1] for r in WITH_CYCLES])
+def test_every_hole_of_a_cycle_is_drilled_to_its_depth(rel):
+    """At every GOTO between CYCLE/<kind> (FEDTO d, RTRCTO r) and CYCLE/OFF a feed move ends
+    d below the point along the tool axis (the GOTO's i,j,k: wall-holes drills sideways)
+    and the hole's last move is a rapid to r above it (the records read here by splitting
+    their text, not with ncperf)."""
+    p, tp = load(rel)
+    holes = []
+    depth = retract = None
+    for k, t in enumerate(lines_of(p), 1):
+        if t.startswith("CYCLE/OFF"):
+            depth = None
+        elif t.startswith("CYCLE/") and "FEDTO" in t:
+            words = t[6:].split(",")
+            depth = float(words[words.index("FEDTO") + 1])
+            retract = float(words[words.index("RTRCTO") + 1])
+        elif t.startswith("GOTO/") and depth is not None:
+            v = [float(s) for s in t[5:].split(",")]
+            axis = np.array(v[3:6]) if len(v) == 6 else np.array([0.0, 0.0, 1.0])
+            holes.append((k, np.array(v[:3]), axis, depth, retract))
+    assert len(holes) >= 6
+    for line, top, axis, d, r in holes:
+        own = np.flatnonzero(tp.line == line)
+        assert own.size >= 3, line
+        bottom = tp.end[own][tp.kind[own] == MoveKind.LINE]
+        assert np.allclose(bottom[-1], top - axis * d, atol=1e-9), line
+        assert tp.kind[own[-1]] == MoveKind.RAPID
+        assert np.allclose(tp.end[own[-1]], top + axis * r, atol=1e-9), line
 
 
 def _circle_records(p) -> dict[int, tuple[np.ndarray, np.ndarray, float | None]]:

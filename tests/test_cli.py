@@ -106,7 +106,7 @@ def test_machines_and_plugins_commands():
         ("", None, "empty file"),
         ("G21 G1 X1 F60\nG1 X2 E5\n", 2, "unknown word E"),
         ("G21 G1 X1 F60\nG1 X1.2.3\n", 2, "malformed number"),
-        ("G21 G1 X1 F60\nG1 X1" + "0" * 400 + "\n", 2, "number out of range"),
+        ("G21 G1 X1 F60\nG1 X1" + "0" * 400 + "\n", 2, "X word out of range"),
         ("G21 G1 X0 Y0 F60\nG2 X1 Y0 I0 J0\n", 2, "arc with zero radius"),
     ],
     ids=["empty", "unknown word", "malformed", "inf", "zero radius"],

@@ -52,13 +52,15 @@ def test_flower_mold_is_inch():
 
 
 def test_nist_box_program_notices():
-    """The NIST Fanuc-style program: two tools, G28 and the G54 -> G58 change are reported."""
+    """The NIST Fanuc-style program: two tools; G28 (home in machine coordinates) and the
+    G54 -> G58 change with offsets nobody gave are reported."""
     p = shared("data", "nist-mtc-box-op2", "BOX_REV-A_OP2_Front.NC")
     tp = read_gcode(p.read_bytes(), str(p))
     assert len(tp.op_names) == 2
     assert set(tp.tool.tolist()) == {3, 21}
     text = "\n".join(str(n) for n in tp.notices)
-    assert "G28/G30" in text and "work offset changes to G58" in text
+    assert "G28 moves in machine coordinates but the work offset G54 is not known" in text
+    assert "work offset changes to G58, whose value is not known" in text
 
 
 def _segments(tp, step=0.05):

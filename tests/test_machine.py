@@ -116,14 +116,18 @@ def test_presets_load_and_the_840d_keeps_the_papers_t_int():
 
 
 def test_840d_preset_marks_its_assumptions():
-    """Every value of the 840D preset but t_int is flagged as an assumption next to it."""
+    """Every value of the 840D preset but t_int (from the paper) and the default path mode
+    (from Siemens' documentation) is flagged as an assumption next to it."""
     from importlib import resources
 
     text = (resources.files("core.model") / "presets" / "siemens-840d.toml").read_text()
     for line in text.splitlines():
         if "=" in line and not line.startswith(("#", "name")):
             key = line.split("=")[0].strip()
-            expect = "FROM THE PAPER" if key == "interpolation_time" else "ASSUMED"
+            expect = {
+                "interpolation_time": "FROM THE PAPER",
+                "default_path_mode": "FROM SIEMENS",
+            }.get(key, "ASSUMED")
             assert expect in line, line
 
 

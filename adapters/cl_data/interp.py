@@ -552,8 +552,10 @@ class Reader:
 
     def _cycle(self, rec: Record) -> None:
         """CYCLE/type, FEDTO d, RAPTO r, RTRCTO c, MMPM|IPM f, STEP|1STPECK/SUBPECK,
-        DWELL t: while on, each GOTO is a hole whose top is the point (see
-        :func:`_expand_cycle`); CYCLE/OFF ends it, CYCLE/INIT (SolidWorks CAM) marks its start."""
+        DWELL t (the keyword form NX and SolidWorks CAM write), or the standard APT form
+        CYCLE/DRILL, d, IPM|MMPM, f, c (DEEP and BRKCHP: d, step, IPM|MMPM, f, c): while on,
+        each GOTO is a hole whose top is the point (see :meth:`_hole`); CYCLE/OFF ends it,
+        CYCLE/INIT (SolidWorks CAM) marks its start."""
         args = [a.strip().upper() for a in rec.args or []]
         if not args or args[0] == "OFF":
             self.cycle = None
@@ -564,10 +566,16 @@ class Reader:
         if kind not in CYCLE_KINDS:
             raise self._error(rec, f"CYCLE/{kind} is not a drilling cycle ncperf knows")
         c: dict[str, Any] = {"kind": kind, "line": rec.line}
+        positional: list[float] = []
         k = 1
         while k < len(args):
             word = args[k]
             nxt = args[k + 1] if k + 1 < len(args) else None
+            if _is_number(word):
+                # the standard APT form: CYCLE/DRILL, d, IPM, f, c (DEEP/BRKCHP: d, s, ...)
+                positional.append(float(word))
+                k += 1
+                continue
             if word in ("DEEP", "BRKCHP", "DRILL", "TAP", "BORE", "REAM", "FACE", "CSINK"):
                 c["kind"] = word if kind == "DRILL" else kind
                 k += 1
@@ -595,6 +603,20 @@ class Reader:
             else:
                 self.notes.add(f"CYCLE/{kind}: {word} passed over", rec.line)
             k += 2
+        if positional:
+            names = (
+                ["depth", "peck", "clear"]
+                if c["kind"] in ("DEEP", "BRKCHP")
+                else ["depth", "clear"]
+            )
+            if len(positional) > len(names):
+                raise self._error(
+                    rec,
+                    f"CYCLE/{kind}: {len(positional)} numbers where the APT form has "
+                    f"{len(names)} ({', '.join(names)})",
+                )
+            for name, v in zip(names, positional, strict=False):
+                c[name] = abs(v) * self.scale if name != "clear" else v * self.scale
         if "depth" not in c:
             raise self._error(rec, f"CYCLE/{kind} without its depth FEDTO")
         c.setdefault("clear", 0.0)

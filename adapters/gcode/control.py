@@ -648,6 +648,13 @@ class Controller:
             if 540 <= code <= 593 or (d == "siemens" and (code == 5000 or 5050 <= code <= 5990)):
                 if code == 541 and d == "fanuc":  # G54.1 Pn: additional work offsets
                     code = 5400 + int(words.get("P", 1))
+                if code != self.wcs and self.origin is not None and code not in self.wcs_offsets:
+                    self.notes.add(
+                        f"work offset changes to G{code / 10:g}, whose value is not known (no "
+                        "G10 L2 in the program, no [offsets] in the machine file): 0 assumed, "
+                        "so moves before and after may not be placed relative to each other",
+                        self.line,
+                    )
                 self.wcs = code
                 self.changed()
         # path mode
@@ -907,6 +914,8 @@ class Controller:
         d = self.dialect
         home = [c for c in g if c in (280, 300)]
         machine = 530 in g or 1530 in g
+        if machine:
+            self._unknown_offset("G53")
         cycle_here = [c for c in g if c in CYCLES]
         for code in g:
             if code in (0, 10, 20, 30):
@@ -1314,9 +1323,22 @@ class Controller:
         self.add(kind, start, end, rot_end, center=centre, normal=normal, turns=turns)
 
     # ------------------------------------------------------------------ home
+    def _unknown_offset(self, what: str) -> None:
+        """A move in machine coordinates (G28, G30, G53) while the work offset in force has
+        no value from the program or the machine file: say that it is taken as 0."""
+        if self.wcs in self.wcs_offsets or self.dialect == "siemens":
+            return
+        self.notes.add(
+            f"{what} moves in machine coordinates but the work offset G{self.wcs / 10:g} is "
+            "not known (no G10 L2 in the program, no [offsets] in the machine file): 0 "
+            "assumed, so the rapids to and from there are approximate",
+            self.line,
+        )
+
     def _home(self, code: int, words: dict[str, Any]) -> None:
         if self.comp.active:
             raise ControlError("G28/G30 with cutter compensation on")
+        self._unknown_offset(f"G{code // 10}")
         mid, rot_mid = self._target(words, False, {})
         if any(a in words for a in "XYZ") or self.dialect == "linuxcnc":
             self.add(0, self.pos, mid, rot_mid)

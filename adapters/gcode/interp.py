@@ -380,8 +380,9 @@ class Interpreter:
             if change.size:
                 k = wcs_set[change[0] + 1]
                 self.notes.add(
-                    f"work offset changes to G{codes[change[0] + 1] / 10:g}: the offsets are "
-                    "unknown, so moves before and after are not placed relative to each other",
+                    f"work offset changes to G{codes[change[0] + 1] / 10:g}, whose value is not "
+                    "known (no G10 L2 in the program, no [offsets] in the machine file): 0 "
+                    "assumed, so moves before and after may not be placed relative to each other",
                     int(self.al[k]),
                 )
         geom_inch = np.zeros(na, dtype=bool)
