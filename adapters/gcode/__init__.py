@@ -77,6 +77,7 @@ def read_gcode(
             block_delete,
             default_path_mode=setup.default_path_mode,
             offsets_known=bool(setup.offsets),
+            lengths_known=bool(setup.tool_length),
         )
     except (InputError, NeedsInterpreter):
         pass

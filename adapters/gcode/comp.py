@@ -120,6 +120,7 @@ class Compensator:
             nu, nv = self._normal_of(pu - cu, pv - cv)
             # queued, not emitted: a concave corner after it moves its end point
             self.pending = {
+                "src": self._src(),
                 "type": "line",
                 "kind": kind,
                 "start": (cu, cv),
@@ -147,6 +148,7 @@ class Compensator:
         start_off = (pu + R * nu, pv + R * nv)
         end_off = (eu + R * nu, ev + R * nv)
         element = {
+            "src": self._src(),
             "type": "line",
             "kind": kind,
             "start": start_off,
@@ -186,6 +188,7 @@ class Compensator:
         t0 = (-(pv - cv) * turn, (pu - cu) * turn)
         t1 = (-(ev - cv) * turn, (eu - cu) * turn)
         element = {
+            "src": self._src(),
             "type": "arc",
             "kind": kind,
             "start": start_off,
@@ -223,6 +226,7 @@ class Compensator:
                 self.flush()
                 assert self.prog is not None
                 corner: dict[str, Any] = {
+                    "src": el["src"],  # a corner belongs to the block it leads into
                     "type": "arc" if convex else "line",
                     "start": cur,
                     "end": (su, sv),
@@ -242,7 +246,21 @@ class Compensator:
             self.pending = None
             self._emit(el)
 
+    def _src(self) -> tuple[int, int, int, int]:
+        """The block an element comes from (it is emitted when the next one is known)."""
+        ctl = self.ctl
+        return (ctl.line, ctl.file, ctl.call, ctl.block_number)
+
     def _emit(self, el: dict[str, Any]) -> None:
+        ctl = self.ctl
+        now = self._src()
+        ctl.line, ctl.file, ctl.call, ctl.block_number = el["src"]
+        try:
+            self._add(el)
+        finally:
+            ctl.line, ctl.file, ctl.call, ctl.block_number = now
+
+    def _add(self, el: dict[str, Any]) -> None:
         ctl = self.ctl
         i, j, k = self._plane()
         cur = ctl.pos

@@ -47,6 +47,10 @@ PECK_CLEARANCE_INCH = 0.010
 FANUC_PECK_RETURN = 0.1
 
 
+#: Where the Fanuc external work offset (G10 L2 P0) is kept among the work offsets.
+EXTERNAL_OFFSET = 0
+
+
 class ControlError(Exception):
     """An error of the current block (the runner adds file, line and text)."""
 
@@ -260,15 +264,19 @@ class Controller:
         self.rotation_plane = 170
         self.scaling: tuple[Vec, Vec] | None = None  # G51: centre, factors
         self.mirror: Vec = (1.0, 1.0, 1.0)
+        self.mirror_centre: Vec = ORIGIN
         self.siemens_frame: Frame | None = None  # TRANS/ROT/SCALE/MIRROR chain
         self.tool = -1
         self.tool_selected = -1
         self.tool_name: str | None = None
+        self.named_tools: dict[str, int] = {}
         self.length_offset = 0.0  # G43, added to Z
         self.comp = Compensator(self)
         self.inverse_time = False  # G93: F is 1 / (minutes of the move)
         self.inverse_f = math.nan
-        self.retract_r_plane = False  # G99
+        # G99 (back to R) or G98: LinuxCNC's interpreter starts in G99 (interp_setup.cc
+        # retract_mode = R_PLANE) unless the startup code says G98; Fanuc powers on in G98
+        self.retract_r_plane = dialect == "linuxcnc"
         self.canned: int | None = None  # the canned cycle in force (G73, G81...)
         self.spindle_speed = 0.0
         self.cycle: dict[str, float] = {}
@@ -339,6 +347,8 @@ class Controller:
         if self._frame_cache is not None:
             return self._frame_cache
         off = self.wcs_offsets.get(self.wcs, ORIGIN)
+        if EXTERNAL_OFFSET in self.wcs_offsets and self.dialect == "fanuc":
+            off = _add(off, self.wcs_offsets[EXTERNAL_OFFSET])
         local = _add(self.g92, self.g52)
         m: tuple[Vec, Vec, Vec] | None = None
         rot = self.wcs_rotation.get(self.wcs, 0.0)
@@ -365,10 +375,17 @@ class Controller:
                 t = _add(Frame(m).vector(t_rot), t)
                 m = _matmul(m, m2)
         if self.scaling is not None or self.mirror != (1.0, 1.0, 1.0):
-            centre, f = self.scaling or (ORIGIN, (1.0, 1.0, 1.0))
-            f = (f[0] * self.mirror[0], f[1] * self.mirror[1], f[2] * self.mirror[2])
+            # mirror about its centre, then scale about the scaling centre:
+            # p -> cs + fs (cm + fm (p - cm) - cs) = (fs fm) p + cs (1 - fs) + fs cm (1 - fm)
+            centre, fs = self.scaling or (ORIGIN, (1.0, 1.0, 1.0))
+            fm, cm = self.mirror, self.mirror_centre
+            f = (fs[0] * fm[0], fs[1] * fm[1], fs[2] * fm[2])
             s: tuple[Vec, Vec, Vec] = ((f[0], 0.0, 0.0), (0.0, f[1], 0.0), (0.0, 0.0, f[2]))
-            shift = (centre[0] * (1 - f[0]), centre[1] * (1 - f[1]), centre[2] * (1 - f[2]))
+            shift = (
+                centre[0] * (1 - fs[0]) + fs[0] * cm[0] * (1 - fm[0]),
+                centre[1] * (1 - fs[1]) + fs[1] * cm[1] * (1 - fm[1]),
+                centre[2] * (1 - fs[2]) + fs[2] * cm[2] * (1 - fm[2]),
+            )
             if m is None:
                 m = s
                 t = _add(t, shift)
@@ -390,7 +407,10 @@ class Controller:
         self._frame_cache = None
 
     def program_pos(self) -> Vec:
-        """The current point in program coordinates (mm)."""
+        """The current point in program coordinates (mm): with cutter compensation on, the
+        programmed point, not the tool's (axes not written and increments start there)."""
+        if self.comp.side != 0 and self.comp.prog is not None:
+            return self.frame().inverse(self.comp.prog)
         return self.frame().inverse(self.pos)
 
     # ------------------------------------------------------------------ runs of plain lines
@@ -607,7 +627,10 @@ class Controller:
             self.spindle_speed = abs(words["S"])
         if "tool" in extra:
             self.tool_name = extra["tool"]
-            self.tool_selected = -2 - len(self.tool_name)  # a named tool: no number
+            # a named tool has no number: -2, -3, ... one per name, in order of appearance
+            self.tool_selected = self.named_tools.setdefault(
+                self.tool_name, -2 - len(self.named_tools)
+            )
         if 6 in m or (d == "siemens" and ("T" in words or "tool" in extra) and 6 not in m):
             if 6 in m or d == "siemens":
                 self._tool_change()
@@ -765,10 +788,10 @@ class Controller:
         if lv in (2, 20):
             p = round(words.get("P", 0))
             if self.dialect == "fanuc" and p == 0:
-                self.notes.add(
-                    "G10 L2 P0 (external work offset) applied to every system", self.line
-                )
-            code = self.wcs if p == 0 else 530 + 10 * p if 1 <= p <= 6 else 5400 + p
+                # the external work offset shifts every work coordinate system
+                code = EXTERNAL_OFFSET
+            else:
+                code = self.wcs if p == 0 else 530 + 10 * p if 1 <= p <= 6 else 5400 + p
             if self.dialect == "linuxcnc" and 7 <= p <= 9:
                 code = {7: 591, 8: 592, 9: 593}[p]
             old = self.wcs_offsets.get(code, ORIGIN)
@@ -810,6 +833,16 @@ class Controller:
             self.params.set(5201 + 20 * k + i, off[i] / self.scale)
 
     def _g52(self, words: dict[str, Any]) -> None:
+        """G52 local offset. LinuxCNC keeps it in G92's registers (coordinates.adoc: G52 and
+        G92 share them, so one replaces the other and G92.1 clears both); Fanuc adds it to
+        the work system on its own."""
+        if self.dialect == "linuxcnc":
+            new = list(self.g92)
+            for k, v in self._axes(words).items():
+                new[k] = v
+            self.g92 = self.g92_saved = (new[0], new[1], new[2])
+            self.changed()
+            return
         new = list(self.g52)
         for k, v in self._axes(words).items():
             new[k] = v
@@ -832,7 +865,8 @@ class Controller:
             for k, v in axes.items():
                 base = wcs[k] + self.g52[k] + (self.length_offset if k == 2 else 0.0)
                 new[k] = self.pos[k] - base - v
-            self.g92 = (new[0], new[1], new[2])
+            # LinuxCNC keeps the offset in #5211.. as well: G92.3 restores it from there
+            self.g92 = self.g92_saved = (new[0], new[1], new[2])
         elif code in (921, 922):
             self.g92_saved = self.g92 if code == 922 else ORIGIN
             self.g92 = ORIGIN
@@ -869,10 +903,19 @@ class Controller:
         self.changed()
 
     def _mirror(self, code: int, words: dict[str, Any]) -> None:
+        """Fanuc G51.1 X.. Y..: mirror about the given positions (axis words are the axes
+        of symmetry, no move); G50.1 cancels it on the axes named (all without any)."""
+        named = [k for k, c in enumerate("XYZ") if c in words]
+        m = list(self.mirror)
+        c = list(self.mirror_centre)
         if code == 501:
-            self.mirror = (1.0, 1.0, 1.0)
+            for k in named or [0, 1, 2]:
+                m[k], c[k] = 1.0, 0.0
         else:
-            self.mirror = tuple(-1.0 if c in words else 1.0 for c in "XYZ")  # type: ignore
+            for k in named:
+                m[k], c[k] = -1.0, words["XYZ"[k]] * self.scale
+        self.mirror = (m[0], m[1], m[2])
+        self.mirror_centre = (c[0], c[1], c[2])
         self.changed()
 
     def _siemens_frame(self, kind: str, values: dict[str, float]) -> None:
@@ -953,7 +996,7 @@ class Controller:
         if "pattern" in extra:
             self._pattern(*extra["pattern"])
             return
-        if 100 in g or 920 in g or 520 in g or 680 in g or 510 in g:
+        if any(c in g for c in (100, 920, 520, 680, 510, 501, 511)):
             return  # their axis words are data, not a move
         if "@" in words or "^" in words:
             self._polar(words)
@@ -1160,6 +1203,8 @@ class Controller:
         """Machine coordinates of the block's end point (and the rotary axes, deg)."""
         sc = self.scale
         if machine:
+            if not self.absolute and self.dialect == "linuxcnc":
+                raise ControlError("G53 in incremental mode (G91): LinuxCNC refuses it")
             p = list(self.pos)
             for k, a in enumerate("XYZ"):
                 if a in words:
@@ -1395,6 +1440,10 @@ class Controller:
         repeats = int(words.get("L", words.get("K", 1) if self.dialect == "fanuc" else 1))
         if repeats < 0:
             raise ControlError("a canned cycle cannot repeat a negative number of times")
+        if repeats == 0 and self.dialect == "linuxcnc":
+            raise ControlError("L0: LinuxCNC cannot do zero repeats of a canned cycle")
+        if code == 860 and self.dialect == "linuxcnc" and self.spindle_cw is None:
+            raise ControlError("G86 with the spindle not turning (M3 or M4 first)")
         old = here[nk] if self.cycle_initial is None else self.cycle_initial
         if self.absolute:
             r = cy["r"]
@@ -1403,7 +1452,7 @@ class Controller:
             bb = words[axis[j]] * sc if axis[j] in words else here[j]
             da = db = 0.0
         else:
-            r = cy["r"] + (old if self.dialect == "linuxcnc" else here[nk])
+            r = cy["r"] + old  # incremental R: from the initial level (both dialects)
             bottom = r + cy["z"]
             aa, bb = here[i], here[j]
             da = words[axis[i]] * sc if axis[i] in words else 0.0
@@ -1536,10 +1585,18 @@ class Controller:
             if not lc:
                 rapid(a, b, clear)
         elif code == 760 and not lc:
-            # Fanuc fine boring: feed in, oriented stop, shift Q, rapid out, shift back
+            # Fanuc fine boring: feed in, oriented spindle stop, shift Q away from the wall,
+            # rapid out, shift back (the direction is a machine parameter, 5101 RD1/RD2:
+            # +X of the plane taken here)
             feed(a, b, bottom)
             self._add_dwell(dwell)
-            rapid(a, b, clear)
+            q = self.cycle.get("q", 0.0)
+            if q > 0:
+                rapid(a + q, b, bottom)
+                rapid(a + q, b, clear)
+                rapid(a, b, clear)
+            else:
+                rapid(a, b, clear)
         elif code == 870:
             raise ControlError("G87 back boring is not supported")
         else:
@@ -1565,6 +1622,21 @@ class Controller:
                 raise ControlError("feed move without a feed rate F")
             self.add(1, self.pos, f.apply((c[0], c[1], c[2])), self.rot)
             centre_p = (c[0], c[1], c[2])
+        loops = int(words.get("L", 1))
+        if loops < 1:
+            raise ControlError(f"G{code // 10} with L{loops}: at least one pass")
+        for rep in range(loops):
+            if rep and "Z" in words:  # L repeats a G91 pocket deeper each time (Haas)
+                c = list(centre_p)
+                c[nk] = c[nk] + words["Z"] * sc if not self.absolute else c[nk]
+                self.add(1, self.pos, f.apply((c[0], c[1], c[2])), self.rot)
+                centre_p = (c[0], c[1], c[2])
+            self._pocket_passes(kind, words, centre_p, f)
+
+    def _pocket_passes(self, kind: int, words: dict[str, Any], centre_p: Vec, f: Frame) -> None:
+        """One pass of a circle pocket at the current depth."""
+        sc = self.scale
+        i, _, _ = PLANES[self.plane]
         r_first = words["I"] * sc
         r_last = words.get("K", words["I"]) * sc
         step = words.get("Q", 0.0) * sc

@@ -25,6 +25,8 @@ from typing import Any
 
 #: A Fanuc variable that was never set ("vacant", #0): 0 in arithmetic, omitted as a word.
 VACANT = None
+#: LinuxCNC's TOLERANCE_EQUAL: EQ and NE compare within it (rs274ngc interp_internal.hh).
+LINUXCNC_EQUAL = 1e-6
 
 Node = Any  # float | tuple (a small expression tree)
 
@@ -64,6 +66,10 @@ FUNCTIONS: dict[str, Callable[[float], float]] = {
     "SQRT": _checked("SQRT", math.sqrt),
     "FIX": lambda x: float(math.floor(x)),
     "FUP": lambda x: float(math.ceil(x)),
+    # Fanuc Custom Macro B: FIX drops the fraction, FUP rounds away from zero
+    # (FIX[-1.2] = -1, FUP[-1.2] = -2); LinuxCNC's are floor and ceil
+    "FIX_FANUC": lambda x: float(math.trunc(x)),
+    "FUP_FANUC": lambda x: float(math.copysign(math.ceil(abs(x)), x)),
     "ROUND": _round_half_away,
     # Fanuc
     "SQR": _checked("SQRT", math.sqrt),
@@ -83,6 +89,10 @@ BINARY: dict[str, tuple[int, Callable[[float, float], float]]] = {
     "-": (3, lambda a, b: a - b),
     "EQ": (2, lambda a, b: float(a == b)),
     "NE": (2, lambda a, b: float(a != b)),
+    # LinuxCNC: values within TOLERANCE_EQUAL (1e-6) are equal (G-code overview,
+    # "Equality and floating-point values")
+    "EQ~": (2, lambda a, b: float(abs(a - b) < LINUXCNC_EQUAL)),
+    "NE~": (2, lambda a, b: float(abs(a - b) >= LINUXCNC_EQUAL)),
     "GT": (2, lambda a, b: float(a > b)),
     "GE": (2, lambda a, b: float(a >= b)),
     "LT": (2, lambda a, b: float(a < b)),
@@ -108,9 +118,11 @@ def _divide(a: float, b: float) -> float:
 
 
 def _mod(a: float, b: float) -> float:
+    """rs274ngc's MOD: fmod, made non-negative by adding |b| (7 MOD -3 = 1, -7 MOD 3 = 2)."""
     if b == 0:
         raise ExprError("MOD by zero")
-    return a - b * math.floor(a / b)
+    r = math.fmod(a, b)
+    return r + abs(b) if r < 0 else r
 
 
 def _power(a: float, b: float) -> float:
@@ -248,6 +260,8 @@ class BracketParser:
             c.expect("[", f"'[' after {name}")
             e = self.expr(c)
             c.expect("]", "']'")
+            if not self.named and name in ("FIX", "FUP"):
+                name = f"{name}_FANUC"
             return ("fn", name, e)
         raise ExprError(f"unknown function or operator '{name}'")
 
@@ -310,10 +324,22 @@ class BracketParser:
                 return left
             c.take(op)
             right = self.expr(c, prec + 1)
+            if self.named and op in ("EQ", "NE"):
+                op = f"{op}~"  # LinuxCNC's tolerant equality
             left = ("bin", op, left, right)
 
 
 # ----------------------------------------------------------------------------- infix
+#: Siemens 840D operator priorities (SINUMERIK 840D sl programming manual, "Priority of the
+#: operations"): comparisons bind least, so "R1>2 AND R2<3" needs brackets.
+SIEMENS_PRECEDENCE = {
+    "*": 6, "/": 6, "DIV": 6, "MOD": 6,
+    "+": 5, "-": 5,
+    "AND": 4, "XOR": 3, "OR": 2,
+    "==": 1, "<>": 1, ">": 1, "<": 1, ">=": 1, "<=": 1,
+}  # fmt: skip
+
+
 class InfixParser:
     """Siemens 840D expressions: R parameters, variables by name, ``( )``."""
 
@@ -396,7 +422,7 @@ class InfixParser:
             op = self._operator(c)
             if op is None:
                 return left
-            prec = BINARY[op][0]
+            prec = SIEMENS_PRECEDENCE[op]
             if prec < min_prec:
                 return left
             c.take(op)
@@ -491,10 +517,10 @@ def evaluate(node: Node, store: Store, variables: dict[str, float] | None = None
         op = node[1]
         va = evaluate(node[2], store, variables)
         vb = evaluate(node[3], store, variables)
-        if op in ("EQ", "NE", "==", "<>") and (va is None or vb is None):
+        if op in ("EQ", "NE", "==", "<>", "EQ~", "NE~") and (va is None or vb is None):
             # Fanuc: a vacant variable equals only another vacant one (#0)
             same = (va is None) == (vb is None) and (va is None or va == vb)
-            return float(same if op in ("EQ", "==") else not same)
+            return float(same if op in ("EQ", "==", "EQ~") else not same)
         result = BINARY[op][1](_num(va), _num(vb))
         if not math.isfinite(result):
             raise ExprError(f"{op} gives a value out of range")

@@ -134,6 +134,7 @@ class Interpreter:
         *,
         default_path_mode: str | None = None,
         offsets_known: bool = False,
+        lengths_known: bool = False,
     ) -> None:
         self.src = src
         self.w = words
@@ -145,6 +146,9 @@ class Interpreter:
         #: the machine file gives work offsets: a change of work offset needs the full
         #: interpreter (alone, one offset is the program's own origin)
         self.offsets_known = offsets_known
+        #: the machine file gives tool lengths: G43 moves the axes, the full interpreter
+        #: applies them
+        self.lengths_known = lengths_known
 
     # ------------------------------------------------------------------ helpers
     def error(self, line: int, message: str) -> Exception:
@@ -306,6 +310,8 @@ class Interpreter:
             if entry.message:
                 self.notes.add(entry.message, first)
             group[sel] = entry.group
+        if self.lengths_known and np.isin(code, [430, 431, 432]).any():
+            raise NeedsInterpreter("tool lengths from the machine file")
         exact = np.abs(v * 10 - code) < TOL.code_number
         if not exact.all():
             k = np.argmin(exact)
@@ -822,6 +828,7 @@ def interpret(
     *,
     default_path_mode: str | None = None,
     offsets_known: bool = False,
+    lengths_known: bool = False,
 ) -> ToolPath:
     """The ToolPath of a tokenised program."""
     d = dialect or detect_dialect(src.name, words)
@@ -832,4 +839,5 @@ def interpret(
         block_delete,
         default_path_mode=default_path_mode,
         offsets_known=offsets_known,
+        lengths_known=lengths_known,
     ).run()

@@ -108,6 +108,7 @@ class Unit:
             "pairs": {},  # line -> matching line (loops and ifs)
         }
         stack: list[tuple[Any, int, str]] = []
+        sub_open: Any = None  # the LinuxCNC subroutine being defined
         for i in range(self.n):
             b = self.block(i)
             if b is None:
@@ -122,6 +123,20 @@ class Unit:
             kind = s[0]
             if kind == "o":
                 label, kw = s[1], s[2]
+                if isinstance(label, tuple):  # o[expression]: a call resolved when it runs
+                    if kw != "call":
+                        raise self.src.error(
+                            i, f"o[...] {kw}: only a call may name its label by an expression"
+                        )
+                    continue
+                if kw == "sub":
+                    if sub_open is not None:
+                        raise self.src.error(
+                            i, f"nested subroutine definition (o{_show(sub_open)} sub is open)"
+                        )
+                    sub_open = label
+                elif kw == "endsub":
+                    sub_open = None
                 st["o_lines"].setdefault(_key(label), []).append((i, kw))
             elif kind == "prog":
                 if s[1] is not None:
@@ -381,14 +396,18 @@ class Runner:
             handled, stop = self._statement(stack, fr, b, s)
             if handled:
                 return stop
-        # parameter assignments: all values read before any is set (rs274ngc)
-        if b.assigns:
-            values = [(t, self._eval(v)) for t, v in b.assigns]
-            for t, v in values:
-                self._assign(t, v)
+        # parameter assignments: all values read before any is set; LinuxCNC also reads
+        # the block's words before ("#3=6 G1 X#3" moves to the old #3: rs274ngc docs,
+        # "Parameter Setting"); Fanuc and Siemens set them first
+        values = [(t, self._eval(v)) for t, v in b.assigns]
+        early = self.dialect == "linuxcnc" and (b.words or b.extra)
+        words = self._words(b) if early else None
+        for t, v in values:
+            self._assign(t, v)
         if not b.words and not b.extra:
             return False
-        words = self._words(b)
+        if words is None:
+            words = self._words(b)
         ctl = self.ctl
         ctl.line = b.line
         ctl.file = b.file
@@ -998,10 +1017,16 @@ def to_toolpath(runner: Runner, moves: list[Move], units_inch: bool) -> ToolPath
     change = np.flatnonzero(np.diff(op) != 0) + 1
     offs = np.concatenate([[0], change, [n]]).astype(np.int64)
     names = []
+    named = {v: k for k, v in runner.ctl.named_tools.items()}
     for a in offs[:-1]:
         t = int(cols["tool"][a])
         where = int(cols["line"][a])
-        names.append(f"T{t} from line {where}" if t >= 0 else f"from line {where}")
+        if t >= 0:
+            names.append(f"T{t} from line {where}")
+        elif t in named:
+            names.append(f'T="{named[t]}" from line {where}')
+        else:
+            names.append(f"from line {where}")
     cols["op_offsets"] = offs
     tp = ToolPath(
         **cols,

@@ -193,8 +193,10 @@ def _check_keys(
     source: str,
     text: str,
     optional: tuple[str, ...] = (),
+    line: int | None = None,
 ) -> None:
-    """Unknown and missing keys of ``[name]`` ("" for the top level)."""
+    """Unknown and missing keys of ``[name]`` ("" for the top level; ``line``: where an
+    inline table is written)."""
     where = f"[{name}]" if name else "the file"
     known = expected + optional
     for key in table:
@@ -205,14 +207,14 @@ def _check_keys(
                 if close
                 else f"; expected one of {', '.join(known)}"
             )
-            line = _line_of(text, key, name)
-            if line is None:  # a sub-table such as [axes.W]
-                line = _table_line(text, f"{name}.{key}" if name else key)
-            raise MachineError(f"unknown key '{key}' in {where}{hint}", source=source, line=line)
+            at = line if line is not None else _line_of(text, key, name)
+            if at is None:  # a sub-table such as [axes.W]
+                at = _table_line(text, f"{name}.{key}" if name else key)
+            raise MachineError(f"unknown key '{key}' in {where}{hint}", source=source, line=at)
     for key in expected:
         if key not in table:
-            line = _table_line(text, name) if name else None
-            raise MachineError(f"missing key '{key}' in {where}", source=source, line=line)
+            at = line if line is not None else (_table_line(text, name) if name else None)
+            raise MachineError(f"missing key '{key}' in {where}", source=source, line=at)
 
 
 def _number(value: object, key: str, name: str, source: str, text: str) -> float:
@@ -374,7 +376,9 @@ def _setup(ctrl: dict, offsets: object, tools: object, source: str, text: str) -
                 source=source,
                 line=line,
             )
-        _check_keys(value, (), f"tools.{name}", source, text, ("diameter", "radius", "length"))
+        _check_keys(
+            value, (), f"tools.{name}", source, text, ("diameter", "radius", "length"), line
+        )
         entry = {}
         for key in ("diameter", "radius", "length"):
             if key in value:
