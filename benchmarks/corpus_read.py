@@ -6,8 +6,8 @@ their own licences). Prints one row per file -- read, or refused with ncperf's o
 reason -- and a table per CAM system / dialect when a manifest (a JSON list of objects with
 ``local_path``, ``system`` and ``dialect``) names them. A traceback or a hang is reported as
 a crash. ``--lcnc`` also runs LinuxCNC's own interpreter on each file through
-``../shared/tools/linuxcnc/lcnc_path_check.py`` (needs LinuxCNC) and says whether both read
-the same path, line by line, rapids included.
+``benchmarks/lcnc_oracle.py`` (needs LinuxCNC) and says whether both read the same path,
+line by line, rapids included.
 """
 
 from __future__ import annotations
@@ -25,7 +25,10 @@ from collections import Counter, defaultdict
 from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
-CHECK = ROOT.parent / "shared" / "tools" / "linuxcnc" / "lcnc_path_check.py"
+#: LinuxCNC's interpreter in machine coordinates (work offsets applied) with the trace
+#: machine's startup code; ../shared/tools/linuxcnc/lcnc_path_check.py is the same check
+#: without offsets (a change of work offset looks like a jump there).
+CHECK = ROOT / "benchmarks" / "lcnc_oracle.py"
 SKIP = {".md", ".json", ".txt"}
 
 

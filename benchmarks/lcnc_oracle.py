@@ -14,10 +14,11 @@ Feed and rapid lengths are summed per source line (mm) and compared with what
 ``ncperf analyze --json`` lists per line. One line per file: SAME, RAPIDS (feed path the
 same), DIFF, MISS (ncperf refuses what LinuxCNC reads) or SKIP (LinuxCNC refuses it).
 
-The interpreter runs with LinuxCNC's defaults: programs without G20/G21 are read in
-inches by this module (rs274ngc's default without a machine), tools 1-999 with zero
-diameter and length (T words, G43 and H are taken out of the copy it reads, as the shared
-check does: outside a running LinuxCNC a tool change stops the module).
+The interpreter runs the startup code of the trace suite's millimetre machine
+(default_mill_mm.ini: G21 G17 G90 G94 G40 G49 G80 G54), so a program without G20/G21 is
+read in millimetres, as ncperf reads it; tools 1-999 have zero diameter and length (T
+words, G43 and H are taken out of the copy it reads, as the shared check does: outside a
+running LinuxCNC a tool change stops the module).
 """
 
 from __future__ import annotations
@@ -35,6 +36,10 @@ import time
 from collections import defaultdict
 
 MM_PER_INCH = 25.4
+#: The machine's startup code: RS274NGC_STARTUP_CODE of
+#: ../shared/tools/linuxcnc/machines/default_mill_mm.ini (the trace suite's millimetre mill),
+#: so that a program without G20/G21 is read in millimetres as that machine reads it.
+STARTUP_CODE = "G21 G17 G90 G94 G40 G49 G80 G54"
 TOOL_WORDS = re.compile(r"(?i)(?:\bG\s*0*4[39](?:\.\d)?(?![\d.])|\bT\s*\d+|\bH\s*\d+)")
 COMMENT = re.compile(r"\([^)]*\)|;.*$")
 
@@ -182,7 +187,7 @@ def _read(path, q):
         cwd = os.getcwd()
         os.chdir(d)
         try:
-            res, last = gcode.parse(copy, canon, "", "")
+            res, last = gcode.parse(copy, canon, "", STARTUP_CODE)
         finally:
             os.chdir(cwd)
     if res > gcode.MIN_ERROR:

@@ -339,6 +339,11 @@ def _words(c: E.Cursor, b: Block, parser: E.BracketParser) -> None:
             raise BlockError(f"malformed number or word '{_token(c.text, c.pos)}'")
         c.take(ch)
         if ch == "O":
+            if c.text[c.pos : c.pos + 1].isalpha():
+                name = "O" + _alpha_run(c.text, c.pos)
+                raise BlockError(
+                    f"program name {name} (Okuma OSP): the Okuma dialect is not supported"
+                )
             raise BlockError("O word with other words in the block (a program number stands alone)")
         start = c.pos
         nxt = c.text[c.pos : c.pos + 1]

@@ -279,10 +279,16 @@ class Compensator:
 
 
 def _intersection(a: dict[str, Any], b: dict[str, Any], near: tuple[float, float]):
-    """The intersection of two offset elements (lines or arcs) nearest ``near``, or None."""
+    """The intersection of two offset elements (lines or arcs) nearest ``near``, or None.
+
+    A line is taken as the line through its end (the earlier element ``a``) or its start
+    (the later ``b``) parallel to its *programmed* direction, as rs274ngc's concave corner
+    does (convert_straight_comp2: the end moves back by R / tan(half the corner) along the
+    programmed direction): the same for ordinary lines, not for the entry move, whose
+    offset is not parallel to its programmed line."""
     if a["type"] == "line" and b["type"] == "line":
-        p, r = a["start"], (a["end"][0] - a["start"][0], a["end"][1] - a["start"][1])
-        q, s = b["start"], (b["end"][0] - b["start"][0], b["end"][1] - b["start"][1])
+        p, r = a["end"], a["dir1"]
+        q, s = b["start"], b["dir0"]
         den = r[0] * s[1] - r[1] * s[0]
         if abs(den) <= TOL.float_slack * math.hypot(*r) * math.hypot(*s):
             return None  # parallel
@@ -292,8 +298,14 @@ def _intersection(a: dict[str, Any], b: dict[str, Any], near: tuple[float, float
     if a["type"] == "arc" and b["type"] == "arc":
         pts = _circles(a["centre"], a["r"], b["centre"], b["r"])
     else:
-        ln, ar = (a, b) if a["type"] == "line" else (b, a)
-        pts = _line_circle(ln["start"], ln["end"], ar["centre"], ar["r"])
+        if a["type"] == "line":
+            ar = b
+            base, d = a["end"], a["dir1"]
+        else:
+            ar = a
+            base, d = b["start"], b["dir0"]
+        other = (base[0] + d[0], base[1] + d[1])
+        pts = _line_circle(base, other, ar["centre"], ar["r"])
     if not pts:
         return None
     return min(pts, key=lambda x: math.hypot(x[0] - near[0], x[1] - near[1]))
