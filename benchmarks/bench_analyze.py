@@ -5,8 +5,9 @@ Not a test: from the repository root (package installed) run
     python benchmarks/bench_analyze.py [--runs 3] [--moves 1000000]
 
 Programs: ``stellabee1.ngc`` (169k lines, LinuxCNC's trajectory-planner test suite, in
-../shared; skipped when absent) and a generated zig-zag finishing raster of 1,000,000
-moves (benchmarks/gen_finishing.py). Each run is a fresh ``python -m core analyze``
+../shared; skipped when absent), the same with a parameter and a G28 (read by the full
+interpreter, which hands the plain lines to the vectorised reader), and a generated zig-zag
+finishing raster of 1,000,000 moves (benchmarks/gen_finishing.py). Each run is a fresh ``python -m core analyze``
 process; wall time is measured around it and peak memory is the child's maximum resident
 set size (os.wait4). A second table splits one in-process run into its stages.
 
@@ -89,6 +90,12 @@ def main() -> None:
         programs = []
         if STELLABEE.exists():
             programs.append(("stellabee1.ngc (169k lines)", STELLABEE))
+            # the same program with a parameter at the top and a home return at the end: the
+            # full interpreter reads it, handing its plain runs to the vectorised reader
+            mixed = tmp / "stellabee1_macro_g28.ngc"
+            data = STELLABEE.read_bytes()
+            mixed.write_bytes(b"#<depth> = 1.5\n" + data.replace(b"M2", b"G28\nM2"))
+            programs.append(("stellabee1 + #<depth> and G28 (full interpreter)", mixed))
         gen = tmp / "finishing.nc"
         n = generate(str(gen), args.moves)
         programs.append((f"generated raster ({n:,} moves)", gen))

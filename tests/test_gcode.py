@@ -553,3 +553,17 @@ def test_the_first_offending_line_is_named_quoted_as_written():
     """Two constructs ncperf refuses: the first is named, its line quoted in its own case."""
     err = fails("G21 G1 X1 F60\nG76 p1 z-1\nG5 X1 Y2\n", 2, "G76 threading cycle", "t.ngc")
     assert str(err).endswith(": G76 p1 z-1")
+
+
+def test_fanuc_rigid_tapping_g84_2_and_look_ahead_codes():
+    """G84.2 (Fanuc rigid tapping) runs G84's moves: rapid over the hole at the initial
+    level 10 (G98), rapid to R 2, feed to -10 and back to R, rapid up to 10; G05.1 Q1 and
+    G08 P1 (look-ahead modes) are read with a note."""
+    tp = read("G21 G90\nG0 X0 Y0 Z10\nM3 S500\nG84.2 X5 Y5 Z-10 R2 F625\nG80\nM30\n")
+    assert np.allclose(
+        tp.end, [[0, 0, 10], [5, 5, 10], [5, 5, 2], [5, 5, -10], [5, 5, 2], [5, 5, 10]]
+    )
+    assert list(tp.kind) == [0, 0, 0, 1, 1, 0]
+    for code in ("G05.1 Q1", "G08 P1"):
+        tp = read(f"G21 G90\n{code}\nG0 X0 Y0 Z5\nG1 X10 F500\nM30\n")
+        assert "look-ahead" in notices(tp) or "contour control" in notices(tp)

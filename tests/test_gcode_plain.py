@@ -48,7 +48,9 @@ PROGRAMS = {
         + "\nG18\n"
         + _run(40, lambda k: "G2 X0.1 Z0 I0.05 K0")
         + "\nG17 G21 G90 G90.1\nG0 X20 Y0\n"
-        + _run(40, lambda k: f"G3 X{20 * math.cos(k * 0.1):.4f} Y{20 * math.sin(k * 0.1):.4f} I0 J0")
+        + _run(
+            40, lambda k: f"G3 X{20 * math.cos(k * 0.1):.4f} Y{20 * math.sin(k * 0.1):.4f} I0 J0"
+        )
         # block by block again: the run's G90.1 must still hold (centre I0 J0 absolute)
         + "\n#2 = 20\nG3 X[#2] Y0 I0 J0\nG53 G0 Z0\nM2\n",
     ),

@@ -513,6 +513,10 @@ class Controller:
         and M numbers)."""
         g = words.get("G", [])
         m = words.get("M", [])
+        if self.dialect == "fanuc" and (842 in g or 843 in g):
+            # Fanuc rigid tapping G84.2 / G84.3 (left hand): G84 / G74 with the spindle
+            # synchronised, the same moves
+            g = words["G"] = [840 if c == 842 else 740 if c == 843 else c for c in g]
         table = W.FULL_TABLES[self.dialect]
         for code in g:
             entry = table.get(code)
