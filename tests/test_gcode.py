@@ -567,3 +567,12 @@ def test_fanuc_rigid_tapping_g84_2_and_look_ahead_codes():
     for code in ("G05.1 Q1", "G08 P1"):
         tp = read(f"G21 G90\n{code}\nG0 X0 Y0 Z5\nG1 X10 F500\nM30\n")
         assert "look-ahead" in notices(tp) or "contour control" in notices(tp)
+
+
+def test_siemens_cycle800_without_a_swivel_passes_and_with_one_is_refused():
+    """CYCLE800 with its swivel data record's name (a string) and all angles 0 changes
+    nothing; with an angle (argument 8, _A) it needs the machine's kinematics: refused."""
+    call = 'CYCLE800(1,"TC1",0,57,0,0,0,{a},0,0,0,0,0,1)'
+    tp = read(f"G71 G90\n{call.format(a=0)}\nG0 X0 Y0 Z10\nG1 X10 F100\nM30\n", "t.mpf")
+    assert np.allclose(tp.end, [[0, 0, 10], [10, 0, 10]])
+    fails(f"G71 G90\n{call.format(a=30)}\nG1 X10 F100\n", 2, "CYCLE800 swivelling", "t.mpf")

@@ -619,6 +619,9 @@ class SiemensParser:
         args = []
         for part in _split_top(m.group(2), ","):
             part = part.strip()
+            if len(part) >= 2 and part[0] == part[-1] == '"':
+                args.append(None)  # a string (a swivel data record's name): no number
+                continue
             args.append(self._value(part) if part else None)
         return (m.group(1), args)
 
