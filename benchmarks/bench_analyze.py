@@ -7,9 +7,10 @@ Not a test: from the repository root (package installed) run
 Programs: ``stellabee1.ngc`` (169k lines, LinuxCNC's trajectory-planner test suite, in
 ../shared; skipped when absent), the same with a parameter and a G28 (read by the full
 interpreter, which hands the plain lines to the vectorised reader), and a generated zig-zag
-finishing raster of 1,000,000 moves (benchmarks/gen_finishing.py). Each run is a fresh ``python -m core analyze``
-process; wall time is measured around it and peak memory is the child's maximum resident
-set size (os.wait4). A second table splits one in-process run into its stages.
+finishing raster of 1,000,000 moves (benchmarks/gen_finishing.py). Each run is a fresh
+``python -m core analyze`` process; wall time is measured around it and peak memory is the
+child's maximum resident set size (os.wait4). A second table splits one in-process run into
+its stages.
 
 Target (issue 2): under 5 s and under 1 GB for the 1M-move program on one core.
 """

@@ -616,7 +616,7 @@ class SiemensParser:
             if m2:
                 return (m2.group(1), [])
             raise BlockError(f"malformed call '{text}'")
-        args = []
+        args: list[Any] = []
         for part in _split_top(m.group(2), ","):
             part = part.strip()
             if len(part) >= 2 and part[0] == part[-1] == '"':
