@@ -64,12 +64,13 @@ for f in demo.svg a.json a.svg trace.csv c.svg d.json; do
     [ -s "$WORK/$f" ] || { echo "check_wheel: $f not written"; exit 1; }
 done
 # bad input: one line, exit 1, no traceback
-printf 'G21 G90\nG1 X1 Y1 F100\nG38.2 Z-5\n' >"$WORK/bad.ngc"
+printf 'G21 G90\nG1 X1 Y1 F100\nG5 X2 Y2 I1 J1 P1 Q1\n' >"$WORK/bad.ngc"
 set +e
 "$NC" analyze "$WORK/bad.ngc" >/dev/null 2>"$WORK/err.txt"
 rc=$?
 set -e
-if [ "$rc" -ne 1 ] || grep -q Traceback "$WORK/err.txt"; then
+if [ "$rc" -ne 1 ] || grep -q Traceback "$WORK/err.txt" ||
+    [ "$(wc -l <"$WORK/err.txt")" -ne 1 ] || ! grep -q "bad.ngc:3: cubic spline G5" "$WORK/err.txt"; then
     cat "$WORK/err.txt"; echo "check_wheel: bad input gave exit $rc"; exit 1
 fi
 echo "check_wheel: the installed wheel runs every command"

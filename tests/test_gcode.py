@@ -576,3 +576,26 @@ def test_siemens_cycle800_without_a_swivel_passes_and_with_one_is_refused():
     tp = read(f"G71 G90\n{call.format(a=0)}\nG0 X0 Y0 Z10\nG1 X10 F100\nM30\n", "t.mpf")
     assert np.allclose(tp.end, [[0, 0, 10], [10, 0, 10]])
     fails(f"G71 G90\n{call.format(a=30)}\nG1 X10 F100\n", 2, "CYCLE800 swivelling", "t.mpf")
+
+
+def test_siemens_expressions_with_blanks_around_operators():
+    """840D programs write "R2 = R1 / 15": the blanks do not split the expression.
+    D = 30: R1 = 30 / 15 = 2, R2 = 2 * 2 + 1 = 5, R3 = 7 DIV 2 = 3 (integer division)."""
+    tp = read(
+        "G71 G90\nDEF REAL D=30\nR1 = D / 15\nR2 = R1 * 2 + 1\nR3 = 7 DIV 2\n"
+        "G1 X=R1 Y=R2 Z=R3 F100\nM30\n",
+        "t.mpf",
+    )
+    assert np.allclose(tp.end, [[2, 5, 3]])
+
+
+def test_marlin_dwell_s_in_seconds_and_haas_engraving_named():
+    """Fusion's Marlin post writes G4 S2 (2 s); Haas G47 engraving is refused by name."""
+    tp = read("G21 G90\nG0 X0 Y0 Z5\nG1 X10 F100\nG4 S2\nG1 X20\nM30\n", "t.gcode")
+    assert np.allclose(tp.dwell, [0, 2, 0])
+    assert "G4 S read as seconds (Marlin)" in notices(tp)
+    fails(
+        "G21 G90\nG0 X0 Y0\nG47 P0 (ABC) X0 Y0 I0 J.5 R.05 Z-.005 F15. E10.\n",
+        3,
+        "G47 text engraving",
+    )

@@ -765,6 +765,11 @@ def _split_top(text: str, sep: str) -> list[str]:
     return out
 
 
+_S_OPERATOR_END = ("=", "+", "-", "*", "/", "<", ">")
+_S_OPERATOR_START = ("=", "+", "-", "*", "/", "<", ">")
+_S_WORD_OPERATORS = {"DIV", "MOD", "AND", "OR", "XOR", "NOT", "B_AND", "B_OR", "B_XOR", "B_NOT"}
+
+
 def _split_words(up: str) -> list[str]:
     """Siemens words: separated by spaces outside parentheses and strings; ``X = 5`` is one
     word; letter-number words written together (``G1X10Y5``) are split."""
@@ -785,13 +790,20 @@ def _split_words(up: str) -> list[str]:
                 continue
         cur.append(ch)
     raw.append("".join(cur))
-    # join "X", "=", "5" and "X=", "5"
+    # join "X", "=", "5" and "X=", "5"; and expressions written with blanks around their
+    # operators: "R2 = R1 / 15", "R3 = R1 DIV 2" (a word starts with a letter, never with
+    # an operator, and no word ends with one)
     merged: list[str] = []
     for tok in raw:
         if not tok:
             continue
-        if merged and (merged[-1].endswith("=") or tok.startswith("=")):
-            merged[-1] += tok
+        if merged and (
+            merged[-1].endswith(_S_OPERATOR_END)
+            or tok.startswith(_S_OPERATOR_START)
+            or tok in _S_WORD_OPERATORS
+            or merged[-1].split(" ")[-1] in _S_WORD_OPERATORS
+        ):
+            merged[-1] += " " + tok
         else:
             merged.append(tok)
     out: list[str] = []

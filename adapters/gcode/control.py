@@ -764,6 +764,10 @@ class Controller:
             t = words.get("P")
         elif d == "fanuc":
             t = words["X"] if "X" in words else (words["P"] / 1000.0 if "P" in words else None)
+            if t is None and "S" in words:
+                # Marlin (and RepRap) G4 S: seconds, what Fusion's Marlin posts write
+                t = words["S"]
+                self.notes.add("G4 S read as seconds (Marlin)", self.line)
         else:
             if "S" in words and "F" not in words:
                 raise ControlError("G4 S (dwell in spindle revolutions) is not supported")

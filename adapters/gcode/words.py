@@ -131,6 +131,7 @@ FANUC: dict[int, GCode] = {
     _c(70): GCode(Group.UNITS),  # older Fanuc systems: G70 inch / G71 metric
     _c(71): GCode(Group.UNITS),
     _c(60): GCode(None, "G60 single-direction positioning is not supported"),
+    _c(47): GCode(None, "G47 text engraving (Haas) is not supported"),
 }
 
 SIEMENS: dict[int, GCode] = {
