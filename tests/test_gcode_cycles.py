@@ -3,9 +3,9 @@
 Every expected path below is a hand calculation (the derivation is in the comments), from
 the LinuxCNC 2.9 documentation (docs/src/gcode/g-code.adoc, "G80-G89 Canned Cycles") and
 its interpreter (src/emc/rs274ngc/interp_cycles.cc: convert_cycle_xy, CYCLE_MACRO,
-convert_cycle_g73/g83, G83_RAPID_DELTA = 0.010 in the program's units), the Fanuc/Haas
-manuals (initial level, point R, K repeats, G73/G83 d = parameters 5114/5115: 0.1 mm
-here), the Haas G12/G13 description and the SINUMERIK 840D cycles guide (CYCLE81-83,
+convert_cycle_g73/g83, G83_RAPID_DELTA = 0.010 in, 0.254 mm), the Fanuc/Haas
+manuals (initial level, point R, K repeats, G73/G83 d = parameters 5114/5115, set to
+0.1 mm here through the machine setup's peck_clearance), the Haas G12/G13 description and the SINUMERIK 840D cycles guide (CYCLE81-83,
 MCALL). The LinuxCNC-dialect programs were checked against LinuxCNC's own interpreter
 (benchmarks/lcnc_oracle.py and its canonical calls); the numbers here are written out
 by hand, not computed by ncperf.
@@ -22,6 +22,7 @@ import pytest
 
 from adapters.cl_data import read_cl
 from adapters.gcode import read_gcode
+from adapters.gcode.control import MachineSetup
 from core import InputError
 
 R, F = 0, 1  # rapid, feed line
@@ -361,6 +362,7 @@ def test_fanuc_k0_stores_data_and_r_z_stay_modal_until_g80():
         "M30\n",
         "t.nc",
         dialect="fanuc",
+        setup=MachineSetup(peck_clearance=0.1),  # parameter 5115 = 0.1 mm
     )
     assert len(on_line(tp, 3)) == 0  # K0: nothing moves
     assert_moves(tp, 4, [(R, 5, 5, 10), (R, 5, 5, 2), (F, 5, 5, -3), (R, 5, 5, 10)])
@@ -387,6 +389,17 @@ def test_fanuc_k0_stores_data_and_r_z_stay_modal_until_g80():
     assert_moves(tp, 8, [(R, 20, 5, 20)])
 
 
+def test_fanuc_peck_clearance_defaults_to_linuxcnc_with_a_notice():
+    """Without the machine's parameter, G83 comes back to 0.254 mm above the last peck
+    (LinuxCNC's value), and says so: Q2 from R2 pecks to 0, out to R, down to 0.254."""
+    tp = read(
+        "G21 G90\nG0 X0 Y0 Z10\nG98 G83 X1 Y1 Z-3 R2 Q2 F100\nG80\nM30\n", "t.nc", dialect="fanuc"
+    )
+    z = tp.end[on_line(tp, 3), 2]
+    assert np.allclose(z[:6], [10, 2, 0, 2, 0.254, -2])
+    assert any("peck_clearance" in n.message for n in tp.notices)
+
+
 def test_fanuc_g80_forgets_r_and_z():
     with pytest.raises(InputError) as info:
         read(
@@ -403,6 +416,7 @@ def test_fanuc_g73_high_speed_peck_returns_d():
         "G21 G90 G17\nG0 X0 Y0 Z10\nG99 G73 X3 Y4 Z-2.5 R1 Q1 F120\nG80\nM30\n",
         "t.nc",
         dialect="fanuc",
+        setup=MachineSetup(peck_clearance=0.1),  # parameter 5114 = 0.1 mm
     )
     assert_moves(
         tp,

@@ -40,11 +40,10 @@ PLANES = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}
 NORMALS = {170: (0.0, 0.0, 1.0), 180: (0.0, 1.0, 0.0), 190: (1.0, 0.0, 0.0)}
 CYCLES = {730, 740, 760, 810, 820, 830, 840, 850, 860, 870, 880, 890}
 #: LinuxCNC 2.9's G73/G83 retract past the last peck depth (interp_internal.hh
-#: G83_RAPID_DELTA): 0.010 inch, in the program's units.
+#: G83_RAPID_DELTA): 0.010 inch, 0.254 mm. A Fanuc's is its parameters 5114 (G73) and 5115
+#: (G83), a Haas's its setting 22: each machine its own, so the machine file's
+#: ``peck_clearance``, else LinuxCNC's. Siemens CYCLE83 computes its own (below).
 PECK_CLEARANCE_INCH = 0.010
-#: Fanuc parameters 5114 (G73 return) and 5115 (G83 clearance): machine-specific; 0.1 mm
-#: is the value Fanuc's manual examples use. Siemens CYCLE83 computes its own (below).
-FANUC_PECK_RETURN = 0.1
 
 
 #: Where the Fanuc external work offset (G10 L2 P0) is kept among the work offsets.
@@ -77,6 +76,8 @@ class MachineSetup:
         --tool-radius: the radius of every tool for cutter compensation.
     search : tuple of str
         Folders for subprogram files after the program's own.
+    peck_clearance : float or None
+        mm above the last peck that G73/G83 come back to (None: LinuxCNC's 0.254 mm).
     """
 
     home: Vec = ORIGIN
@@ -87,6 +88,7 @@ class MachineSetup:
     default_path_mode: str | None = None
     tool_radius_override: float | None = None
     search: tuple[str, ...] = ()
+    peck_clearance: float | None = None
 
 
 @dataclass
@@ -1528,9 +1530,16 @@ class Controller:
     ) -> None:
         cy = self.cycle
         lc = self.dialect == "linuxcnc"
-        peck_back = PECK_CLEARANCE_INCH * INCH if lc else FANUC_PECK_RETURN
-        if lc and self.units not in (200,):
-            peck_back = PECK_CLEARANCE_INCH * INCH  # 0.254 mm in mm mode (interp_cycles.cc)
+        peck_back = self.setup.peck_clearance
+        if peck_back is None:
+            peck_back = PECK_CLEARANCE_INCH * INCH  # 0.254 mm in both units (interp_cycles.cc)
+            if not lc and code in (730, 830):
+                self.notes.add(
+                    "G73/G83 come back to 0.254 mm above the last peck (LinuxCNC's value; a "
+                    "Fanuc's parameters 5114/5115 or a Haas's setting 22 may differ: "
+                    "peck_clearance in the machine file)",
+                    self.line,
+                )
         dwell = cy.get("p", 0.0)
         if not lc:
             dwell = dwell / 1000.0  # Fanuc P in ms

@@ -90,4 +90,5 @@ def machine_setup(cs: ControllerSetup) -> MachineSetup:
         default_path_mode=cs.default_path_mode,
         tool_radius_override=cs.tool_radius,
         search=tuple(cs.subroutine_path),
+        peck_clearance=cs.peck_clearance,
     )

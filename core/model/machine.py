@@ -25,6 +25,7 @@ Optional, for the readers (:mod:`core.model.setup`) and rotary axes::
     home_g30 = [0.0, 0.0, 0.0]         # mm, G30 position
     tool_table = "tool.tbl"            # LinuxCNC tool table, beside this file
     subroutine_path = ["subs"]         # folders for subprogram files
+    peck_clearance = 0.254             # mm, G73/G83 (Fanuc 5114/5115, Haas setting 22)
     [offsets]
     G54 = [100.0, 50.0, -200.0]        # mm, machine coordinates of the work origin
     [tools]
@@ -65,7 +66,14 @@ CONTROLLER_KEYS = {
 #: Rotary axes' keys -> factor to deg/s, deg/s^2, deg/s^3 (max_jerk optional).
 ROTARY_KEYS = {"max_feed": 1.0 / 60.0, "max_acceleration": 1.0, "max_jerk": 1.0}
 #: Optional [controller] keys for the readers (see core.model.setup).
-SETUP_KEYS = ("default_path_mode", "home", "home_g30", "tool_table", "subroutine_path")
+SETUP_KEYS = (
+    "default_path_mode",
+    "home",
+    "home_g30",
+    "tool_table",
+    "subroutine_path",
+    "peck_clearance",
+)
 TOP_KEYS = ("name", "axes", "controller")
 OPTIONAL_TOP_KEYS = ("offsets", "tools")
 #: Keys that may be infinite ("no such limit"): LinuxCNC 2.9 has no jerk limit.
@@ -328,6 +336,10 @@ def _setup(ctrl: dict, offsets: object, tools: object, source: str, text: str) -
             line=_line_of(text, "default_path_mode", "controller"),
         )
     kw: dict = {"default_path_mode": mode}
+    if "peck_clearance" in ctrl:
+        kw["peck_clearance"] = _number(
+            ctrl["peck_clearance"], "peck_clearance", "controller", source, text
+        )
     for key in ("home", "home_g30"):
         if key in ctrl:
             kw[key] = _vec3(ctrl[key], key, "controller", source, text)

@@ -50,6 +50,9 @@ class ControllerSetup:
         Folders searched for subprogram files after the program's own folder.
     tool_radius : float or None
         ``--tool-radius``: the radius of every tool for cutter compensation.
+    peck_clearance : float or None
+        How far above the last peck G73 and G83 come back down (Fanuc parameters 5114 and
+        5115, Haas setting 22; each machine its own); None: LinuxCNC's 0.254 mm.
     """
 
     default_path_mode: str | None = None
@@ -60,3 +63,4 @@ class ControllerSetup:
     tool_table: str | None = None
     subroutine_path: tuple[str, ...] = ()
     tool_radius: float | None = None
+    peck_clearance: float | None = None
