@@ -46,6 +46,10 @@ CYCLES = {730, 740, 760, 810, 820, 830, 840, 850, 860, 870, 880, 890}
 PECK_CLEARANCE_INCH = 0.010
 
 
+#: Most moves a program may make (ten million: the tool path's arrays then take gigabytes);
+#: beyond, the run stops with an error -- a loop without end, or a program too long.
+MAX_MOVES = 10_000_000
+
 #: Where the Fanuc external work offset (G10 L2 P0) is kept among the work offsets.
 EXTERNAL_OFFSET = 0
 
@@ -91,7 +95,7 @@ class MachineSetup:
     peck_clearance: float | None = None
 
 
-@dataclass
+@dataclass(slots=True)
 class Move:
     """One move as the controller runs it (machine coordinates, mm; feed mm/s)."""
 
@@ -242,6 +246,7 @@ class Controller:
         #: runs of plain lines read by the vectorised reader: (index in moves they come
         #: before, their columns)
         self.segments: list[tuple[int, dict[str, Any]]] = []
+        self.plain_moves = 0  # moves in the segments
         #: the translation of the coordinate system in force at the first move: the tool
         #: path is drawn in that system (the part's), not in machine coordinates
         self.origin: Vec | None = None
@@ -469,9 +474,11 @@ class Controller:
             cols["file"] = file
             cols["call"] = call
             cols["op"] = self.op
+            self._count(n)
             if n > 1:
                 head = {k: v[:-1] if isinstance(v, np.ndarray) else v for k, v in cols.items()}
                 self.segments.append((len(self.moves), head))
+                self.plain_moves += n - 1
             k = n - 1
             kind = int(cols["kind"][k])
             self.moves.append(
@@ -508,6 +515,13 @@ class Controller:
             self.feed = final.feed
         self.pos = self.frame().apply(final.pos)
         self.known = list(final.known)
+
+    def _count(self, more: int) -> None:
+        if len(self.moves) + self.plain_moves + more > MAX_MOVES:
+            raise ControlError(
+                f"more than {MAX_MOVES:,} moves: the program loops without end, or is longer "
+                "than ncperf reads"
+            )
 
     # ------------------------------------------------------------------ words
     def block(self, words: dict[str, Any], extra: dict[str, Any]) -> None:
@@ -1275,6 +1289,7 @@ class Controller:
             start = self.pos
         if self.origin is None:
             self.origin = self.frame().t
+        self._count(1)
         inverse = math.nan
         if self.inverse_time and kind != 0:
             if not self.inverse_f > 0:
@@ -1450,6 +1465,8 @@ class Controller:
         repeats = int(words.get("L", words.get("K", 1) if self.dialect == "fanuc" else 1))
         if repeats < 0:
             raise ControlError("a canned cycle cannot repeat a negative number of times")
+        if repeats > MAX_MOVES // 3:
+            raise ControlError(f"{repeats:,} repeats of a canned cycle: more than ncperf reads")
         if repeats == 0 and self.dialect == "linuxcnc":
             raise ControlError("L0: LinuxCNC cannot do zero repeats of a canned cycle")
         if code == 860 and self.dialect == "linuxcnc" and self.spindle_cw is None:
@@ -1642,6 +1659,8 @@ class Controller:
         loops = int(words.get("L", 1))
         if loops < 1:
             raise ControlError(f"G{code // 10} with L{loops}: at least one pass")
+        if loops > MAX_MOVES // 3:
+            raise ControlError(f"G{code // 10} with L{loops:,}: more passes than ncperf reads")
         for rep in range(loops):
             if rep and "Z" in words:  # L repeats a G91 pocket deeper each time (Haas)
                 c = list(centre_p)
@@ -1658,6 +1677,8 @@ class Controller:
         r_last = words.get("K", words["I"]) * sc
         step = words.get("Q", 0.0) * sc
         radii = [r_first]
+        if "K" in words and step > 0 and (r_last - r_first) / step > MAX_MOVES:
+            raise ControlError(f"G12/G13 steps of Q{step:g} from I to K: more than ncperf reads")
         if "K" in words and step > 0:
             rr = r_first
             while rr + step < r_last - TOL.zero_length:

@@ -9,7 +9,8 @@ word with the parameters of the moment, and hands the block to the controller
 (:mod:`adapters.gcode.control`), which keeps the modal state and emits the moves.
 
 Every move keeps the line (and file) it came from, and the chain of calls that led there.
-A run stops with an error after :data:`MAX_BLOCKS` executed blocks (an endless loop).
+A run stops with an error after :data:`MAX_BLOCKS` blocks executed one by one (an endless
+loop: a few seconds of interpretation per million) or :data:`control.MAX_MOVES` moves.
 """
 
 from __future__ import annotations
@@ -42,9 +43,11 @@ from core.model.toolpath import (
     empty_columns,
 )
 
-#: Most blocks a run may execute (loops included): beyond it the program is taken to loop
-#: forever. Ten million blocks are about an hour of real machining at 3 ms a block.
-MAX_BLOCKS = 10_000_000
+#: Most blocks a run may execute one by one (loops included; runs of plain lines handed to
+#: the vectorised reader count towards the moves, not here): beyond it the program is taken
+#: to loop forever. A million blocks are 12-25 s of interpretation (and most of an hour of
+#: machining at 3 ms a block): a program that executes more is refused, not waited for.
+MAX_BLOCKS = 1_000_000
 #: Deepest subprogram nesting (Fanuc allows 10 M98 levels, LinuxCNC 10 call levels).
 MAX_DEPTH = 50
 #: Extensions tried for a subprogram in a file of its own, per dialect.
@@ -316,7 +319,8 @@ class Runner:
                 raise self.error(
                     fr.unit,
                     i,
-                    f"more than {MAX_BLOCKS:,} blocks executed: the program loops without end",
+                    f"more than {MAX_BLOCKS:,} blocks executed one by one: the program loops "
+                    "without end (or is longer than ncperf interprets)",
                 )
             for note in b.notes:
                 self.notes.add(note, i)
@@ -347,15 +351,11 @@ class Runner:
         except InputError:
             runs.refused.add(i)  # block by block gives the verdict
             return False
-        self.executed += j - i
-        if self.executed > MAX_BLOCKS:
-            raise self.error(
-                fr.unit,
-                i,
-                f"more than {MAX_BLOCKS:,} blocks executed: the program loops without end",
-            )
         self.notes.merge(reader.notes, i)
-        self.ctl.take_run(cols, final, fr.unit.index, stack[-1].call_id)
+        try:
+            self.ctl.take_run(cols, final, fr.unit.index, stack[-1].call_id)
+        except ControlError as exc:
+            raise self.error(fr.unit, i, str(exc)) from None
         fr.pc = j
         return True
 
