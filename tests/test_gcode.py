@@ -599,3 +599,16 @@ def test_marlin_dwell_s_in_seconds_and_haas_engraving_named():
         3,
         "G47 text engraving",
     )
+
+
+def test_feed_moves_before_the_first_f_run_at_it_with_a_notice():
+    """Hobby CAM writes its first plunge before the F that follows: run at that F (800 mm/min
+    = 13.33 mm/s, on line 4), said; with no F in the whole program, still the error."""
+    tp = read("G21\nG0 X0 Y0 Z5\nG1 Z-1\nG1 X10 F800\nM2\n")
+    assert np.allclose(tp.feed[1:], 800 / 60)
+    assert "t.nc:3: warning: feed moves before the first F: run at that F (800, line 4)" in notices(
+        tp
+    )
+    fails(
+        "G21\nG0 X0 Y0 Z5\nG1 Z-1 (F800 is a comment)\nM2\n", 3, "feed move without a feed rate F"
+    )

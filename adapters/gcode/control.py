@@ -277,6 +277,8 @@ class Controller:
         self.tool_selected = -1
         self.tool_name: str | None = None
         self.named_tools: dict[str, int] = {}
+        #: the program's first F (value, 0-based line), for feed moves before it
+        self.later_feed: tuple[float, int] | None = None
         self.length_offset = 0.0  # G43, added to Z
         self.comp = Compensator(self)
         self.inverse_time = False  # G93: F is 1 / (minutes of the move)
@@ -1261,9 +1263,23 @@ class Controller:
             return dflt == "exact_stop"
         return pm in W.EXACT_STOP_CODES
 
+    def _first_feed(self, error: str) -> None:
+        """A feed move before any F: hobby CAM writes its first plunge before the F that
+        follows (LinuxCNC's preview runs it; the machine would stop). Run it at the
+        program's first F, and say so; with no F anywhere, the error."""
+        if self.later_feed is None:
+            raise ControlError(error)
+        value, line = self.later_feed
+        self.feed = value * self._feed_scale() / 60.0
+        self.notes.add(
+            f"feed moves before the first F: run at that F ({value:g}, line {line + 1}); the "
+            "machine would refuse them",
+            self.line,
+        )
+
     def _emit_line(self, kind: int, end: Vec, rot_end: Vec, *, exact: bool | None = None) -> None:
         if kind == 1 and self.feed is None and not self.inverse_time:
-            raise ControlError("feed move without a feed rate F")
+            self._first_feed("feed move without a feed rate F")
         if self.comp.active:
             self.comp.line(kind, end, rot_end)
             return
@@ -1323,7 +1339,7 @@ class Controller:
 
     def _arc(self, kind: int, end: Vec, words: dict[str, Any], rot_end: Vec) -> None:
         if self.feed is None and not self.inverse_time:
-            raise ControlError("feed move without a feed rate F")
+            self._first_feed("feed move without a feed rate F")
         f = self.frame()
         if f.m is not None:
             s = f.scale()
@@ -1439,7 +1455,7 @@ class Controller:
         if self.comp.active:
             raise ControlError("canned cycle with cutter compensation on")
         if self.feed is None and code not in (760,):
-            raise ControlError("canned cycle without a feed rate F")
+            self._first_feed("canned cycle without a feed rate F")
         i, j, nk = PLANES[self.plane]
         axis = "XYZ"
         sc = self.scale
@@ -1653,7 +1669,7 @@ class Controller:
             c = list(centre_p)
             c[nk] = c[nk] + z if not self.absolute else z
             if self.feed is None:
-                raise ControlError("feed move without a feed rate F")
+                self._first_feed("feed move without a feed rate F")
             self.add(1, self.pos, f.apply((c[0], c[1], c[2])), self.rot)
             centre_p = (c[0], c[1], c[2])
         loops = int(words.get("L", 1))

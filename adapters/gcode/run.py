@@ -17,6 +17,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
@@ -224,6 +225,20 @@ class Unit:
                 raise self.src.error(i, f"o{_show(label)} {kw} without its end")
 
 
+_COMMENT = re.compile(rb"\([^)\n]*\)|;[^\n]*")
+_FEED_WORD = re.compile(rb"(?<![A-Za-z_])[Ff]\s*(\d+\.?\d*|\.\d+)")
+
+
+def _first_feed_word(data: bytes) -> tuple[float, int] | None:
+    """The first F word of a program with its number (outside comments) and 0-based line."""
+    for k, raw in enumerate(data.split(b"\n")):
+        m = _FEED_WORD.search(_COMMENT.sub(b" ", raw))
+        if m:
+            v = float(m.group(1))
+            return (v, k) if v > 0 else None
+    return None
+
+
 def _key(label: Any) -> Any:
     return label if isinstance(label, str) else float(label)
 
@@ -271,6 +286,7 @@ class Runner:
         self.store = E.Store(vacant_zero=dialect != "fanuc")
         self.variables: list[dict[str, float]] = [{}]
         self.ctl = Controller(dialect, setup, self.notes, self.store)
+        self.ctl.later_feed = _first_feed_word(self.main.src.data)
         self.calls: list[str] = []
         self.call_files: list[str] = []  # per call: the file of its lines ("" the main one)
         self._call_ids: dict[tuple, int] = {}

@@ -7,6 +7,7 @@ computed once, vectorised, on first use.
 
 from __future__ import annotations
 
+import dataclasses
 from dataclasses import dataclass, field
 from enum import IntEnum
 from functools import cached_property
@@ -569,19 +570,48 @@ POINTS_DROPPED = "moves shorter than the 0.001 mm resolution dropped (points, no
 def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
     """Remove moves no longer than :attr:`Tolerances.resolution`: points, not blocks.
 
-    Returns the cleaned path and the indices of the removed moves. A dwell or exact stop
-    on a removed move moves to the move before it; a line after removed moves starts where
-    the last kept move ended (the path stays connected; an arc keeps its start, at most a
-    few resolutions away).
+    A run of such moves is walked from the path's last point: a move that takes the path
+    further than the resolution from there is kept, as a line from there (a stair of
+    0.7 um steps, a V-carve written with six decimals in inches, stays the path LinuxCNC
+    runs, in fewer, longer blocks); the others are points and go (an isolated 0.0001 mm
+    corner arc). Returns the cleaned path and the indices of the removed moves. A dwell or
+    exact stop on a removed move moves to the move before it; a line after removed moves
+    starts where the last kept move ended, at most the resolution away (an arc keeps its
+    start).
     """
-    zero = tp.length <= TOL.resolution
+    res = TOL.resolution
+    zero = tp.length <= res
     if tp.rotary is not None:
-        if (zero & (np.abs(tp.rotary) > TOL.resolution).any(axis=1)).any():
+        if (zero & (np.abs(tp.rotary) > res).any(axis=1)).any():
             raise ValueError("a move that only turns rotary axes belongs in rotary_only")
     if not zero.any():
         return tp, np.zeros(0, dtype=np.int64)
     keep = ~zero
+    start = tp.start.copy()
+    kind = tp.kind.copy()
+    center, normal, sweep = tp.center.copy(), tp.normal.copy(), tp.sweep.copy()
+    idx = np.flatnonzero(zero)
+    first_of_run = np.ones(idx.size, dtype=bool)
+    first_of_run[1:] = idx[1:] != idx[:-1] + 1
+    end = tp.end
+    anchor = end[0]
+    for k, new_run in zip(idx.tolist(), first_of_run.tolist(), strict=True):
+        if new_run:
+            anchor = end[k - 1] if k > 0 else tp.start[k]
+        d = end[k] - anchor
+        if float(d @ d) > res * res:
+            keep[k] = True
+            start[k] = anchor
+            anchor = end[k]
+            if kind[k] >= MoveKind.ARC_CW:  # what is left of a tiny arc is a short line
+                kind[k] = MoveKind.LINE
+                center[k] = normal[k] = np.nan
+                sweep[k] = np.nan
+    zero = ~keep
     removed = np.flatnonzero(zero)
+    if removed.size == 0:
+        merged = dataclasses.replace(tp, start=start, kind=kind, center=center, normal=normal)
+        return dataclasses.replace(merged, sweep=sweep), removed
     # Carry stops and dwells of removed moves back to the last kept move before them.
     last_kept = np.maximum.accumulate(np.where(keep, np.arange(tp.n), -1))
     target = last_kept[removed]
@@ -591,18 +621,17 @@ def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
     mode = tp.path_mode.copy()
     np.maximum.at(mode, target[has], tp.path_mode[removed[has]])
     offs = np.concatenate([[0], np.cumsum(keep)])[tp.op_offsets].astype(np.int64)
-    start = tp.start.copy()
     # kept lines right after removed moves: from the end of the last kept move before
     after = np.flatnonzero(keep[1:] & zero[:-1]) + 1
-    after = after[(tp.kind[after] < MoveKind.ARC_CW) & (last_kept[after - 1] >= 0)]
+    after = after[(kind[after] < MoveKind.ARC_CW) & (last_kept[after - 1] >= 0)]
     start[after] = tp.end[last_kept[after - 1]]
     cols: dict[str, Any] = {
-        "kind": tp.kind[keep],
+        "kind": kind[keep],
         "start": start[keep],
         "end": tp.end[keep],
-        "center": tp.center[keep],
-        "normal": tp.normal[keep],
-        "sweep": tp.sweep[keep],
+        "center": center[keep],
+        "normal": normal[keep],
+        "sweep": sweep[keep],
         "feed": tp.feed[keep],
         "line": tp.line[keep],
         "block": tp.block[keep],
