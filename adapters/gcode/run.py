@@ -809,7 +809,9 @@ class Runner:
                 continue
             line = unit.structure()["progs"].get(p)
             return unit, (line if line is not None else -1)
-        raise ControlError(f"subprogram O{p} not found (not in this file, nor O{p} beside it)")
+        raise ControlError(
+            f"subprogram O{p} not found (not in this file, nor a file O{p} or {p} beside it)"
+        )
 
     # Siemens
     def _siemens_statement(self, stack, fr: Frame, b: B.Block, s: tuple) -> tuple[bool, bool]:
