@@ -5,8 +5,8 @@ the LinuxCNC 2.9 documentation (docs/src/gcode/g-code.adoc, "G80-G89 Canned Cycl
 its interpreter (src/emc/rs274ngc/interp_cycles.cc: convert_cycle_xy, CYCLE_MACRO,
 convert_cycle_g73/g83, G83_RAPID_DELTA = 0.010 in, 0.254 mm), the Fanuc/Haas
 manuals (initial level, point R, K repeats, G73/G83 d = parameters 5114/5115, set to
-0.1 mm here through the machine setup's peck_clearance), the Haas G12/G13 description and the SINUMERIK 840D cycles guide (CYCLE81-83,
-MCALL). The LinuxCNC-dialect programs were checked against LinuxCNC's own interpreter
+0.1 mm here through the machine setup's peck_clearance), the Haas G12/G13 description
+and the SINUMERIK 840D cycles guide (CYCLE81-83, MCALL). The LinuxCNC-dialect programs were checked against LinuxCNC's own interpreter
 (benchmarks/lcnc_oracle.py and its canonical calls); the numbers here are written out
 by hand, not computed by ncperf.
 
