@@ -6,9 +6,9 @@ its interpreter (src/emc/rs274ngc/interp_cycles.cc: convert_cycle_xy, CYCLE_MACR
 convert_cycle_g73/g83, G83_RAPID_DELTA = 0.010 in, 0.254 mm), the Fanuc/Haas
 manuals (initial level, point R, K repeats, G73/G83 d = parameters 5114/5115, set to
 0.1 mm here through the machine setup's peck_clearance), the Haas G12/G13 description
-and the SINUMERIK 840D cycles guide (CYCLE81-83, MCALL). The LinuxCNC-dialect programs were checked against LinuxCNC's own interpreter
-(benchmarks/lcnc_oracle.py and its canonical calls); the numbers here are written out
-by hand, not computed by ncperf.
+and the SINUMERIK 840D cycles guide (CYCLE81-83, MCALL). The LinuxCNC-dialect programs
+were checked against LinuxCNC's own interpreter (benchmarks/lcnc_oracle.py and its
+canonical calls); the numbers here are written out by hand, not computed by ncperf.
 
 Move kinds: 0 rapid, 1 line. Feeds in mm/s (F mm/min / 60; F in/min * 25.4 / 60).
 """
