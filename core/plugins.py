@@ -33,6 +33,8 @@ BUILTIN_EFFECTS: tuple[str, ...] = (
     "path_compression",
     "last_block_acceleration",
     "arc_acceleration",
+    "exact_stop",
+    "path_feed_limit",
 )
 
 #: Built-in plugins, by module name; registered under that name.

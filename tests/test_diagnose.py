@@ -148,7 +148,8 @@ def test_a_known_effect_is_named_first(nc, name, params):
 def test_an_axis_speed_limit_under_the_feed_is_not_a_feed_override(nc):
     """Axes limited to 75 mm/s under F = 100 mm/s: the X and Y moves run at 75, the 45-degree
     moves at min(100, 75 sqrt(2)) = 100. A feed override would slow both; the diagnosis names
-    axis_dynamics, with feed_scale = 75 / 500 = 0.15 (the machine file's axes: 30 m/min)."""
+    axis_dynamics, with X and Y each at 75 mm/s: feed_scale x feed_x = 75 / 500 = 0.15 (the
+    machine file's axes: 30 m/min; a uniform scale and per-axis factors may share it)."""
     tp = path(
         [
             {"end": (50, 0, 0)},
@@ -169,7 +170,9 @@ def test_an_axis_speed_limit_under_the_feed_is_not_a_feed_override(nc):
     tr = synthetic_trace(nc, tp, Setup(machine=slow_axes))
     d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", effects)
     assert d.best_effect == "axis_dynamics"
-    assert d.effects[0].params["feed_scale"] == pytest.approx(0.15, rel=0.03)
+    p = d.effects[0].params
+    assert p["feed_scale"] * p["feed_x"] == pytest.approx(0.15, rel=0.03)
+    assert p["feed_scale"] * p["feed_y"] == pytest.approx(0.15, rel=0.03)
     assert d.effects[0].held_out_gap_after < 0.1 * d.effects[0].held_out_gap_before
 
 

@@ -3,6 +3,7 @@ numbers worked out by hand; machine files switch them on."""
 
 from __future__ import annotations
 
+import dataclasses
 import math
 
 import numpy as np
@@ -28,6 +29,8 @@ NAMES = [
     "path_compression",
     "last_block_acceleration",
     "arc_acceleration",
+    "exact_stop",
+    "path_feed_limit",
 ]
 
 
@@ -45,7 +48,8 @@ def run(nc, effects, tp, m, name=None, ramps=True, **params):
 
 
 def test_the_built_in_effects(nc):
-    """The issue's eleven effects are registered, by these names."""
+    """The built-in effects (issue 5's eleven, two of its own, issue 11's two) are
+    registered, by these names."""
     assert list(nc.effects()) == NAMES
 
 
@@ -223,3 +227,69 @@ def test_machine_file_effect_errors(effects, table, line, message):
     with pytest.raises(MachineError) as info:
         setup_for(machine_from_toml_text(MACHINE + table, "m.toml"), effects)
     assert str(info.value).startswith(f"m.toml:{line}:") and message in str(info.value)
+
+
+def test_axis_dynamics_per_axis(nc, effects):
+    """Each axis its own limits (A = 2500 mm/s^2, F 100 mm/s, no jerk limit):
+    - Y acceleration x 0.5 on a 100 mm line along Y: 100 / 100 + 100 / 1250 = 1.08 s;
+    - X acceleration x 0.5 on the 45-degree line to (100, 100): the tangential acceleration
+      is X's 1250 / cos 45 = 1767.77 mm/s^2, so 141.421 / 100 + 100 / 1767.77 = 1.470782 s;
+    - X speed x 0.2 (100 mm/s, of 500) under F 150 on the same line: the path runs at
+      100 / cos 45 = 141.421 mm/s with the full tangential acceleration 2500 / cos 45 =
+      3535.53 mm/s^2: 141.421 / 141.421 + 141.421 / 3535.53 = 1.04 s."""
+    m = machine(jerk=(INF, INF, INF))
+    along_y = path([{"end": (0, 100, 0)}])
+    diagonal = path([{"end": (100, 100, 0)}])
+    assert run(nc, effects, along_y, m, "axis_dynamics", accel_y=0.5).cycle_time == pytest.approx(
+        1.08
+    )
+    assert run(nc, effects, diagonal, m, "axis_dynamics", accel_x=0.5).cycle_time == pytest.approx(
+        math.hypot(100, 100) / 100 + 100 / (1250 * math.sqrt(2))
+    )
+    fast = path([{"end": (100, 100, 0)}], feed=150.0)
+    slow_x = run(nc, effects, fast, m, "axis_dynamics", feed_x=0.2).cycle_time
+    assert slow_x == pytest.approx(1.04)
+    # the uniform scale is the one-parameter special case of the per-axis factors
+    uniform = run(nc, effects, diagonal, m, "axis_dynamics", accel_scale=0.5).cycle_time
+    per_axis = run(
+        nc, effects, diagonal, m, "axis_dynamics", accel_x=0.5, accel_y=0.5, accel_z=0.5
+    ).cycle_time
+    assert uniform == pytest.approx(per_axis)
+
+
+def test_path_feed_limit(nc, effects):
+    """A 60 mm/s path cap under F 100 on a 100 mm line: 100 / 60 + 60 / 2500 = 1.690667 s,
+    the binding limit labelled "path feed"."""
+    tp = path([{"end": (100, 0, 0)}])
+    p = run(nc, effects, tp, machine(jerk=(INF, INF, INF)), "path_feed_limit", max_feed=60.0)
+    assert p.cycle_time == pytest.approx(100 / 60 + 60 / 2500)
+    ev = p.evaluation
+    assert ev.element_feed[0] == pytest.approx(60.0)
+
+
+def test_exact_stop(nc, effects):
+    """Two 10 mm lines at F 100 (A 2500, no jerk limit), each from rest to rest: 2 mm up in
+    0.04 s, 6 mm at F in 0.06 s, 2 mm down in 0.04 s: 2 x 0.14 = 0.28 s -- collinear or at a
+    corner. Without it the collinear pair runs through: 20 / 100 + 100 / 2500 = 0.24 s."""
+    m = machine(jerk=(INF, INF, INF))
+    straight = path([{"end": (10, 0, 0)}, {"end": (20, 0, 0)}])
+    corner = path([{"end": (10, 0, 0)}, {"end": (10, 10, 0)}])
+    assert run(nc, effects, straight, m).cycle_time == pytest.approx(0.24)
+    assert run(nc, effects, straight, m, "exact_stop").cycle_time == pytest.approx(0.28)
+    assert run(nc, effects, corner, m, "exact_stop").cycle_time == pytest.approx(0.28)
+
+
+def test_block_time_on_blend_arcs(nc):
+    """A 90-degree corner with TIT 0.01 mm: the blend arc has R = 0.01 sin45 / (1 - sin45) =
+    0.0241421 mm and length R pi / 2 = 0.0379224 mm; lasting at least t_int = 12 ms, the
+    corner runs at 0.0379224 / 0.012 = 3.1602 mm/s, under model 1's sqrt(2500 R) = 7.7689.
+    Off (the paper's model 3: programmed blocks only), the corner keeps 7.7689."""
+    tp = path([{"end": (10, 0, 0)}, {"end": (10, 10, 0)}])
+    m = machine(jerk=(INF, INF, INF))
+    r = 0.01 * math.sin(math.pi / 4) / (1 - math.sin(math.pi / 4))
+    off = nc.predict(tp, Setup(machine=m)).evaluation
+    assert off.junction_feed[0] == pytest.approx(math.sqrt(2500 * r))
+    on = nc.predict(tp, Setup(machine=dataclasses.replace(m, block_time_on_blends=True)))
+    ev = on.evaluation
+    assert ev.junction_feed[0] == pytest.approx(r * math.pi / 2 / 0.012)
+    assert ev.indicator_names[ev.junction_indicator[0]] == "ncu_capacity"

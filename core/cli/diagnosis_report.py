@@ -10,7 +10,7 @@ from collections.abc import Mapping
 
 from core.diagnosis.diagnose import Diagnosis
 from core.diagnosis.gaps import GapZone
-from core.diagnosis.rules import ADD_SHARE, BEST_SHARE, GAP_SHARE, MIN_FEED_SHARE, STOP_SHARE
+from core.diagnosis.rules import ADD_SHARE, BEST_SHARE, GAP_SHARE, SIG_P, STOP_SHARE
 from core.engine.effects import Effect
 from core.model.machine import Machine
 
@@ -83,14 +83,17 @@ def report(
             f"{r.held_out_gap_before:8.1f} {r.held_out_gap_after:8.1f} "
             f"{r.removed * 100:7.0f}%"
         )
+    lines.append(
+        f"  to be named      an effect must remove at least {BEST_SHARE:.0%} of the held-out "
+        f"gap, {d.floor:.1f} mm/min ({d.floor_source}), significant at p <= {SIG_P:g} over "
+        "the held-out pieces"
+    )
     if d.best_effect is None:
         lines.append(
-            f"  best effect      none: no effect removes {BEST_SHARE:.0%} of the held-out"
-            f" gap and {MIN_FEED_SHARE:.0%} of F (what is left is noise, or an effect not in"
-            " this list)"
+            f"  best effect      {d.reason} (what is left is noise, or an effect not in this list)"
         )
     else:
-        lines.append(f"  best effect      {d.best_effect}")
+        lines.append(f"  best effect      {d.reason}")
         lines.append(
             f"  chosen           {' + '.join(d.chosen)} (each removing at least "
             f"{ADD_SHARE:.0%} of what was left on held-out data, until less than "
@@ -161,10 +164,18 @@ def to_json(
                 "held_out_gap_before": round(r.held_out_gap_before, 3),
                 "held_out_gap_after": round(r.held_out_gap_after, 3),
                 "removed": round(r.removed, 4),
+                "p": round(r.p, 5),
+                "parameters_moved": r.moved,
             }
             for r in d.effects
         ],
         "best_effect": d.best_effect,
+        "decision": {
+            "reason": d.reason,
+            "floor_mm_min": round(d.floor, 3),
+            "floor_source": d.floor_source,
+            "p_required": SIG_P,
+        },
         "chosen": list(d.chosen),
         "chosen_params": {
             k: {p: round(v, 6) for p, v in ps.items()} for k, ps in d.chosen_params.items()

@@ -13,18 +13,23 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
 3. Every effect (:mod:`core.engine.effects`) has its parameters fitted on calibration data -- the
    even-numbered traces when there are several (other runs or programs), else alternate
    stretches of one run -- and its gap measured on the held-out data it was not fitted on.
-   Effects are ranked by how much of the held-out gap they remove (among equally good ones,
-   within TIE_SHARE, the one with the fewest parameters first); the best one counts only
-   if it removes at least BEST_SHARE of it, and MIN_FEED_SHARE of the programmed feed ("no
-   listed effect explains the gap" is an answer: the model already explains the trace, or
-   what is left is noise or an effect not in the list). Effects are then added greedily
-   while each still removes at least ADD_SHARE of what is left (and MIN_FEED_SHARE of F),
-   and what is left is at least STOP_SHARE of the gap before (below that, a further effect
-   would be fitted to the noise of the first one's fit).
+4. An effect is named from the evidence of the held-out stretches (:func:`decide`; the
+   constants are in :mod:`core.diagnosis.rules`): it must reduce the squared gap on them
+   significantly (a sign-flip test over pieces of the held-out stretches, p <= SIG_P), by more than
+   the noise floor (the machine file's, from ``ncperf calibrate``, else estimated from the
+   trace, and never under MIN_FEED_SHARE of F) and by at least BEST_SHARE of the gap. Among
+   the effects that clear it, those not significantly worse than the best are equally good:
+   the one with the fewest parameters the data moved is named, then the first in
+   EFFECT_PRIORITY. "None" is an answer: the model already explains the trace, or what is
+   left is noise or an effect not in the list. Effects are then added greedily while each
+   clears the same test on what is left (ADD_SHARE of it), until less than STOP_SHARE of the
+   gap before is left.
 """
 
 from __future__ import annotations
 
+import dataclasses
+import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass, field
 
@@ -34,21 +39,37 @@ from numpy.typing import NDArray
 from core.diagnosis.align import Alignment
 from core.diagnosis.fit import fit, predict_all
 from core.diagnosis.gaps import GapZone, gap_zones
-from core.diagnosis.resample import Data, feed_level, gap, resample, split
+from core.diagnosis.resample import (
+    Data,
+    feed_level,
+    gap,
+    held_out_chunks,
+    resample,
+    split,
+    trace_noise,
+)
 from core.diagnosis.rules import (
     ADD_SHARE,
     BEST_SHARE,
+    EFFECT_PRIORITY,
     GAP_COLOURS,
     GAP_EDGES,
     GAP_LABELS,
     MAX_CHOSEN,
     MIN_FEED_SHARE,
+    NOISE_K,
+    PER_MIN,
+    SIG_P,
+    SIGN_FLIPS,
     STOP_SHARE,
+    STRONG_K,
+    TIE_P,
     TIE_SHARE,
 )
 from core.engine.effects import Effect, Setup
 from core.engine.indicators import IndicatorSource
 from core.engine.predict import Prediction
+from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.view.annotations import Annotations
 from core.view.targets import file_target
@@ -61,6 +82,12 @@ class EffectResult:
     held_out_gap_before: float  # mm/min
     held_out_gap_after: float
     calibration_gap_after: float
+    #: parameters the fit moved from where it started (the effect's size on this data)
+    moved: int = 0
+    #: p value of the squared-gap reduction over the held-out pieces (sign-flip test)
+    p: float = 1.0
+    #: squared gap per held-out piece ((mm/min)^2 s), for comparing effects pairwise
+    chunk_sq: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
 
     @property
     def removed(self) -> float:
@@ -84,6 +111,11 @@ class Diagnosis:
     data: tuple[Data, ...] = field(repr=False)
     befores: tuple[Prediction, ...] = field(repr=False)
     afters: tuple[Prediction, ...] = field(repr=False)
+    #: the floor an effect had to clear (mm/min) and where it came from
+    floor: float = 0.0
+    floor_source: str = ""
+    #: why the best effect was (or was not) named, in one sentence
+    reason: str = ""
 
     @property
     def before(self) -> Prediction:
@@ -182,22 +214,14 @@ def diagnose_cases(
                 gap(preds, data, "calibration"),
             )
         )
-    results.sort(key=lambda r: r.held_out_gap_after)
-    # Effects that explain the data equally well (within TIE_SHARE of what the best removes):
-    # the simplest first -- a single feed rate explains an override and an axis feed limit
-    # alike, and the fewer parameters, the fewer ways to fit noise.
-    if results:
-        lead = results[0]
-        margin = TIE_SHARE * max(lead.held_out_gap_before - lead.held_out_gap_after, 0.0)
-        tied = [r for r in results if r.held_out_gap_after - lead.held_out_gap_after <= margin]
-        simplest = min(tied, key=lambda r: (len(effects[r.name].params), r.held_out_gap_after))
-        results.remove(simplest)
-        results.insert(0, simplest)
-    floor = MIN_FEED_SHARE * feed_level(data)
-    best = None
-    if results and results[0].removed >= BEST_SHARE:
-        if results[0].held_out_gap_before - results[0].held_out_gap_after >= floor:
-            best = results[0].name
+    sq_before, _ = held_out_chunks(before, data)
+    for k, r in enumerate(results):
+        sq_after, _ = held_out_chunks(fitted[r.name][1], data)
+        moved = _moved(effects[r.name], r.params, effects[r.name].start(base.machine))
+        p = sign_flip_p(sq_before, sq_after)
+        results[k] = dataclasses.replace(r, moved=moved, p=p, chunk_sq=sq_after)
+    floor, floor_source = noise_floor(base, data)
+    results, best, reason = decide(results, floor)
 
     chosen: list[str] = []
     chosen_params: dict[str, dict[str, float]] = {}
@@ -208,6 +232,7 @@ def diagnose_cases(
         current = effects[best].apply(base, fitted[best][0])
         current_preds = fitted[best][1]
         g_now = gap(current_preds, data, "held_out")
+        sq_now = held_out_chunks(current_preds, data)[0]
         while len(chosen) < MAX_CHOSEN and g_now >= STOP_SHARE * g_before:
             trials = []
             for r in results:
@@ -218,12 +243,18 @@ def diagnose_cases(
             if not trials:
                 break
             g_new, name, params, preds = min(trials, key=lambda x: x[0])
-            if g_now <= 0 or (g_now - g_new) / g_now < ADD_SHARE or g_now - g_new < floor:
+            sq_new = held_out_chunks(preds, data)[0]
+            if (
+                g_now <= 0
+                or (g_now - g_new) / g_now < ADD_SHARE
+                or g_now - g_new < floor
+                or (sign_flip_p(sq_now, sq_new) > SIG_P and g_now - g_new < STRONG_K * floor)
+            ):
                 break
             chosen.append(name)
             chosen_params[name] = params
             current = effects[name].apply(current, params)
-            current_preds, g_now = preds, g_new
+            current_preds, g_now, sq_now = preds, g_new, sq_new
     return Diagnosis(
         baseline=baseline,
         held_out=held_out,
@@ -239,7 +270,120 @@ def diagnose_cases(
         data=tuple(data),
         befores=tuple(before),
         afters=tuple(current_preds),
+        floor=floor,
+        floor_source=floor_source,
+        reason=reason,
     )
+
+
+def sign_flip_p(sq_a: NDArray[np.float64], sq_b: NDArray[np.float64]) -> float:
+    """One-sided p value that ``b``'s squared gap is smaller than ``a``'s over the held-out
+    pieces by chance: the reduction of every piece keeps its size and gets a random sign
+    (the null: the fit helps here as often as it hurts there); p is the share of sign
+    patterns whose total reduction is at least the one observed. Exact for few pieces,
+    else SIGN_FLIPS patterns from a fixed seed."""
+    d = np.asarray(sq_a, dtype=np.float64) - np.asarray(sq_b, dtype=np.float64)
+    scale = float(np.abs(d).max()) if d.size else 0.0
+    d = d[np.abs(d) > TOL.rel_equal * scale] if scale > 0 else d[:0]
+    if d.size == 0:
+        return 1.0
+    observed = float(d.sum())
+    a = np.abs(d)
+    if d.size <= 12:
+        signs = ((np.arange(2**d.size)[:, None] >> np.arange(d.size)) & 1) * 2 - 1
+    else:
+        rng = np.random.default_rng(0)
+        signs = rng.integers(0, 2, size=(SIGN_FLIPS, d.size), dtype=np.int8) * 2 - 1
+    totals = signs @ a
+    tol = TOL.float_slack * float(a.sum())
+    return float(np.mean(totals >= observed - tol))
+
+
+def _moved(eff: Effect, params: Mapping[str, float], start: Mapping[str, float]) -> int:
+    """How many parameters a fit moved from where it started by more than 1 % of their range
+    (in log space for log parameters): the size of the explanation."""
+    k = 0
+    for p in eff.params:
+        v, s0 = params.get(p.name, 0.0), start.get(p.name, 0.0)
+        if p.log and v > 0 and s0 > 0 and p.low > 0:
+            far = abs(math.log(v / s0)) > 0.01 * math.log(p.high / p.low)
+        else:
+            far = abs(v - s0) > 0.01 * (p.high - p.low)
+        k += far
+    return k
+
+
+def noise_floor(base: Setup, data: Sequence[Data]) -> tuple[float, str]:
+    """The least RMS gap reduction (mm/min) an effect must bring, and its source."""
+    least = MIN_FEED_SHARE * feed_level(data)
+    m = base.machine
+    if math.isfinite(m.noise_floor):
+        value, source = m.noise_floor * PER_MIN, "the machine file's noise floor"
+    else:
+        value = NOISE_K * trace_noise(data)
+        source = f"{NOISE_K:g} x the noise of the trace"
+    if value < least:
+        return least, f"{MIN_FEED_SHARE:.1%} of F"
+    return value, source
+
+
+def decide(
+    results: Sequence[EffectResult], floor: float
+) -> tuple[list[EffectResult], str | None, str]:
+    """Rank the effects and name the best one, or none (see the module docstring).
+
+    Returns the effects in rank order (the named or leading one first, then by held-out
+    gap), the named effect and the reason in one sentence."""
+    ranked = sorted(results, key=lambda r: r.held_out_gap_after)
+    if not ranked:
+        return ranked, None, "no effects to try"
+
+    def clears(r: EffectResult) -> bool:
+        return (
+            (r.p <= SIG_P or r.held_out_gap_before - r.held_out_gap_after >= STRONG_K * floor)
+            and r.removed >= BEST_SHARE
+            and r.held_out_gap_before - r.held_out_gap_after >= floor
+        )
+
+    ok = [r for r in ranked if clears(r)]
+    if not ok:
+        lead = ranked[0]
+        why = []
+        if lead.removed < BEST_SHARE:
+            why.append(f"removes {lead.removed:.0%} of the held-out gap (< {BEST_SHARE:.0%})")
+        if lead.held_out_gap_before - lead.held_out_gap_after < floor:
+            why.append(
+                f"removes {lead.held_out_gap_before - lead.held_out_gap_after:.1f} mm/min "
+                f"(< the floor {floor:.1f} mm/min)"
+            )
+        if lead.p > SIG_P and lead.held_out_gap_before - lead.held_out_gap_after < STRONG_K * floor:
+            why.append(
+                f"is not significant over the held-out pieces (p = {lead.p:.2g} > {SIG_P:g})"
+            )
+        return ranked, None, f"none: the best fit, {lead.name}, " + " and ".join(why)
+    lead = ok[0]
+    margin = TIE_SHARE * (lead.held_out_gap_before - lead.held_out_gap_after)
+    equal = [
+        r
+        for r in ok
+        if r.held_out_gap_after - lead.held_out_gap_after <= margin
+        or sign_flip_p(r.chunk_sq, lead.chunk_sq) > TIE_P
+    ]
+    order = {name: k for k, name in enumerate(EFFECT_PRIORITY)}
+    best = min(equal, key=lambda r: (r.moved, order.get(r.name, len(order)), r.held_out_gap_after))
+    ranked.remove(best)
+    ranked.insert(0, best)
+    others = [r.name for r in equal if r is not best]
+    reason = (
+        f"{best.name}: removes {best.removed:.0%} of the held-out gap (p = {best.p:.2g}, "
+        f"floor {floor:.1f} mm/min)"
+    )
+    if others:
+        reason += (
+            f"; {', '.join(others)} explain the data as well, {best.name} is the simpler "
+            "explanation"
+        )
+    return ranked, best.name, reason
 
 
 @dataclass(frozen=True, eq=False)

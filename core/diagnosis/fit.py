@@ -8,7 +8,7 @@ those that minimise the RMS gap over time on the calibration data
 from __future__ import annotations
 
 import math
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,7 +22,7 @@ from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 
 
-def _grid(p: Param, count: int) -> NDArray[np.float64]:
+def grid(p: Param, count: int) -> NDArray[np.float64]:
     if p.log and p.low > 0:
         g = np.geomspace(p.low, p.high, count)
     else:
@@ -62,12 +62,15 @@ def fit(
         score({})
         return {}, cache[()][1]
     params = eff.params
+    if eff.stages:
+        best = _staged(eff, defaults, score)
+        return _refined(eff, best, defaults, score, cache)
     if len(params) == 1:
         p = params[0]
-        candidates = [{p.name: float(x)} for x in _grid(p, GRID_1D)]
+        candidates = [{p.name: float(x)} for x in grid(p, GRID_1D)]
     else:
         per = GRID_2D if len(params) == 2 else GRID_ND
-        grids = [_grid(p, per) for p in params]
+        grids = [grid(p, per) for p in params]
         mesh = np.meshgrid(*grids, indexing="ij")
         candidates = [
             dict(zip([p.name for p in params], map(float, vals), strict=True))
@@ -81,15 +84,57 @@ def fit(
         # speed under the programmed feed): scan each parameter on the fine 1-D grid, the
         # others held at the best so far.
         for p in params:
-            line = [best | {p.name: float(x)} for x in _grid(p, GRID_1D)]
+            line = [best | {p.name: float(x)} for x in grid(p, GRID_1D)]
             best = min([best, *line], key=score)
+    return _refined(eff, best, defaults, score, cache)
+
+
+def _staged(
+    eff: Effect, defaults: dict[str, float], score: Callable[[dict[str, float]], float]
+) -> dict[str, float]:
+    """The coarse search of an effect with stages: the first group on a grid (as a small
+    effect is fitted), each later group one parameter at a time on its 1-D grid, twice."""
+    best = dict(defaults)
+    by_name = {p.name: p for p in eff.params}
+    for k, stage in enumerate(eff.stages):
+        group = [by_name[n] for n in stage]
+        if k == 0 and len(group) <= 3:
+            per = GRID_1D if len(group) == 1 else GRID_2D if len(group) == 2 else GRID_ND
+            grids = [grid(p, per) for p in group]
+            mesh = np.meshgrid(*grids, indexing="ij")
+            candidates = [best] + [
+                best | dict(zip([p.name for p in group], map(float, vals), strict=True))
+                for vals in zip(*(g.ravel() for g in mesh), strict=True)
+            ]
+            best = min(candidates, key=score)
+        for _ in range(2):
+            for p in group:
+                line = [best | {p.name: float(x)} for x in grid(p, GRID_1D)]
+                best = min([best, *line], key=score)
+    return best
+
+
+def _refined(
+    eff: Effect,
+    best: dict[str, float],
+    defaults: dict[str, float],
+    score: Callable[[dict[str, float]], float],
+    cache: dict[tuple, tuple[float, list[Prediction]]],
+) -> tuple[dict[str, float], list[Prediction]]:
+    """Local refinement from ``best``, then parameters the data cannot see back to their
+    defaults."""
+    params = eff.params
+    if eff.stages:
+        # many parameters: refine those the coarse search moved (the others' 1-D scans
+        # found nothing better than where they start)
+        params = tuple(p for p in params if best[p.name] != defaults[p.name])
     # Local refinement, one parameter at a time: a bracket around the best value that halves
     # (in log space for log parameters) every round.
     brackets = {}
     for p in params:
-        grid = _grid(p, GRID_1D)
-        k = int(np.argmin(np.abs(grid - best[p.name])))
-        brackets[p.name] = (float(grid[max(k - 1, 0)]), float(grid[min(k + 1, grid.size - 1)]))
+        g = grid(p, GRID_1D)
+        k = int(np.argmin(np.abs(g - best[p.name])))
+        brackets[p.name] = (float(g[max(k - 1, 0)]), float(g[min(k + 1, g.size - 1)]))
     for _ in range(REFINE):
         for p in params:
             lo, hi = brackets[p.name]
@@ -113,7 +158,7 @@ def fit(
                 brackets[p.name] = (x, hi)
     # A parameter the data cannot see (a jerk scale on a machine without a jerk limit) goes
     # back to its default rather than report a value at random.
-    for p in params:
+    for p in eff.params:
         trial = dict(best)
         trial[p.name] = defaults[p.name]
         if score(trial) <= score(best) * (1 + TOL.rel_equal):

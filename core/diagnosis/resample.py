@@ -23,7 +23,15 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.diagnosis.align import Alignment
-from core.diagnosis.rules import CHUNKS, GAP_PERIODS, MAX_POINTS, PER_MIN, STEP, TIME_FLOOR
+from core.diagnosis.rules import (
+    CHUNKS,
+    GAP_PERIODS,
+    MAX_POINTS,
+    PER_MIN,
+    PIECES,
+    STEP,
+    TIME_FLOOR,
+)
 from core.engine.predict import Prediction
 from core.model.toolpath import ToolPath
 
@@ -40,6 +48,9 @@ class Data:
     label: str
     weight: NDArray[np.float64]  # time spent at each grid point (s)
     case: int = 0  # which program (tool path) the trace ran
+    #: the piece of the run each grid point is in (CHUNKS stretches of PIECES pieces; the
+    #: held-out pieces are the samples of the decision rule's significance test)
+    chunk: NDArray[np.int64] | None = None
 
 
 def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
@@ -88,7 +99,7 @@ def split(data: Sequence[Data]) -> tuple[list[Data], str]:
     programs = {d.case for d in data}
     if len(data) >= 2 and len(programs) == 1:
         out = [
-            dataclasses.replace(d, calibration=np.full(d.s.size, k % 2 == 0))
+            dataclasses.replace(d, calibration=np.full(d.s.size, k % 2 == 0), chunk=pieces(d))
             for k, d in enumerate(data)
         ]
         cal = ", ".join(d.label for k, d in enumerate(data) if k % 2 == 0)
@@ -96,14 +107,42 @@ def split(data: Sequence[Data]) -> tuple[list[Data], str]:
         return out, f"other runs: fitted on {cal}, measured on {held}"
     out = []
     for k, d in enumerate(data):
-        edges = np.quantile(d.s, np.linspace(0, 1, CHUNKS + 1))
-        chunk = np.clip(np.searchsorted(edges, d.s, side="right") - 1, 0, CHUNKS - 1)
-        out.append(dataclasses.replace(d, calibration=chunk % 2 == k % 2))
+        chunk = pieces(d)
+        out.append(dataclasses.replace(d, calibration=(chunk // PIECES) % 2 == k % 2, chunk=chunk))
     runs = "one run" if len(data) == 1 else f"each of {len(data)} runs"
     return out, (
         f"alternate stretches of {runs} ({CHUNKS} stretches of equal length, "
         "every other one fitted and the others measured)"
     )
+
+
+def pieces(d: Data) -> NDArray[np.int64]:
+    """The piece (0..CHUNKS x PIECES - 1, equal arc length; stretch = piece // PIECES) of
+    every grid point of a run."""
+    k = CHUNKS * PIECES
+    edges = np.quantile(d.s, np.linspace(0, 1, k + 1))
+    return np.clip(np.searchsorted(edges, d.s, side="right") - 1, 0, k - 1)
+
+
+def held_out_chunks(
+    preds: Sequence[Prediction], data: Sequence[Data]
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Per held-out piece (run by run): the time-weighted sum of the squared gap
+    ((mm/min)^2 s) and the time (s) -- the samples the decision rule's test uses."""
+    sq: list[float] = []
+    n: list[float] = []
+    for d in data:
+        sel = ~d.calibration
+        if not sel.any():
+            continue
+        chunk = d.chunk if d.chunk is not None else np.zeros(d.s.size, dtype=np.int64)
+        r = (d.v[sel] - preds[d.case].speed_at(d.s[sel])) * PER_MIN
+        w = d.weight[sel]
+        c = chunk[sel]
+        u = np.unique(c)
+        sq.extend(np.bincount(c, weights=w * r * r, minlength=CHUNKS * PIECES)[u].tolist())
+        n.extend(np.bincount(c, weights=w, minlength=CHUNKS * PIECES)[u].tolist())
+    return np.asarray(sq), np.asarray(n)
 
 
 def gap(preds: Sequence[Prediction], data: Sequence[Data], which: str) -> float:
@@ -135,3 +174,14 @@ def feed_level(data: Sequence[Data]) -> float:
         sq += float(np.sum(d.weight[sel] * d.feed[sel] ** 2))
         n += float(d.weight[sel].sum())
     return math.sqrt(sq / n) * PER_MIN if n > 0 else 0.0
+
+
+def trace_noise(data: Sequence[Data]) -> float:
+    """The noise of the measured feed itself (mm/min RMS), from the second differences along
+    the path, robustly (1.4826 x median absolute value / sqrt(6): white noise of that RMS
+    gives it; ramps, whose second difference is zero, and the few corners, add nothing):
+    the noise floor of a machine whose file gives none."""
+    d2 = [np.abs(np.diff(d.v[~d.calibration], 2)) for d in data if (~d.calibration).sum() > 2]
+    if not d2:
+        return 0.0
+    return float(1.4826 * np.median(np.concatenate(d2)) / math.sqrt(6.0)) * PER_MIN

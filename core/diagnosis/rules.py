@@ -18,6 +18,9 @@ TIME_FLOOR = 0.02
 GAP_PERIODS = 20
 #: Stretches of one run used for calibration / held-out data (alternating).
 CHUNKS = 16
+#: Every stretch is cut into this many pieces of equal length: the samples of the decision
+#: rule's significance test (8 held-out stretches of one run give 32).
+PIECES = 4
 #: Gaps are reported in mm/min (as F words); the diagnosis computes in mm/s.
 PER_MIN = 60.0
 
@@ -30,19 +33,54 @@ MERGE_MM = 1.0
 ZONES = 10
 
 # ---------------------------------------------------------------- naming an effect
-#: The best effect must remove this share of the held-out gap; later ones ADD_SHARE of
-#: what is left, until less than STOP_SHARE of the gap before is left.
-BEST_SHARE = 0.20
+#: An effect is named when, on the held-out stretches, it removes (1) significantly more of
+#: the gap than nothing: a one-sided sign-flip test of the reduction of the squared gap,
+#: piece by piece of the held-out stretches, gives p <= SIG_P (the reduction is not one
+#: lucky stretch), and
+#: (2) more than the noise floor: the RMS gap falls by at least the machine's noise floor
+#: (``[diagnosis] noise_floor`` in its file, written by ``ncperf calibrate``), or without one
+#: NOISE_K times the noise estimated from the trace itself, and never less than
+#: MIN_FEED_SHARE of the programmed feed (a gap that small is within what any model of a
+#: controller can promise), and (3) at least BEST_SHARE of the held-out gap.
+SIG_P = 0.01
+#: ... or, where the effect shows in too few places for that test (a few corners), it
+#: removes at least STRONG_K times the floor below: far more than noise could.
+STRONG_K = 3.0
+NOISE_K = 2.0
+MIN_FEED_SHARE = 0.002
+BEST_SHARE = 0.10
+#: Effects not significantly worse than the best (the same test gives p > TIE_P, or within TIE_SHARE
+#: of what the best removes) explain the data equally well: the one with the fewest
+#: parameters the data moved is named, then the one first in EFFECT_PRIORITY (what a
+#: controller more often does, and the simpler story, comes first).
+TIE_P = 0.05
+TIE_SHARE = 0.05
+EFFECT_PRIORITY = (
+    "feed_override",
+    "block_cycle_time",
+    "corner_tolerance",
+    "exact_stop",
+    "path_feed_limit",
+    "axis_dynamics",
+    "arc_feed_limit",
+    "normal_acceleration_factor",
+    "last_block_acceleration",
+    "arc_acceleration",
+    "acceleration_ramps",
+    "lookahead_depth",
+    "path_compression",
+    "servo_lag",
+    "jerk_filter",
+)
+#: Later effects are added while each removes significantly (SIG_P) at least ADD_SHARE of
+#: what is left (and the floor), until less than STOP_SHARE of the gap before is left.
 ADD_SHARE = 0.10
 STOP_SHARE = 0.10
-#: ... and remove at least this share of the programmed feed (RMS over the held-out data):
-#: a gap already within 0.75 % of F is explained, whatever share of it an effect could fit.
-MIN_FEED_SHARE = 0.0075
 #: Most effects chosen together.
 MAX_CHOSEN = 4
-#: Effects whose held-out gaps differ by less than this share of what the best removes are
-#: equally good; the one with the fewest parameters is ranked first.
-TIE_SHARE = 0.05
+#: Random sign patterns of the sign-flip test (exact below 2^12 patterns), from a fixed seed:
+#: the same data always gets the same answer.
+SIGN_FLIPS = 20_000
 
 # ---------------------------------------------------------------- fitting
 #: Grid points per parameter when fitting (then REFINE rounds of local refinement).

@@ -108,6 +108,8 @@ class Setup:
     servo_tau, filter_window : float, s
     end_factor, arc_factor : float
         Shares of the tangential acceleration used on the program's last block and on arcs.
+    exact_stop : bool
+        Every block ends at rest (the controller runs exact stop whatever the program says).
     """
 
     machine: Machine
@@ -122,6 +124,7 @@ class Setup:
     filter_window: float = 0.0
     end_factor: float = 1.0
     arc_factor: float = 1.0
+    exact_stop: bool = False
 
     def replace(self, **changes: Any) -> Setup:
         return dataclasses.replace(self, **changes)
@@ -143,6 +146,10 @@ class Effect:
         Parameters that multiply what the setup already has (scales): fitted on a machine
         that already folds the effect in, they give the further factor. The others set a
         value, and a fit starts from the machine's own.
+    stages : tuple of tuple of str
+        Parameter groups fitted in turn (see the attribute).
+    documented : tuple of (str, float, str)
+        Documented values of parameters (see the attribute).
     """
 
     name: str
@@ -150,6 +157,13 @@ class Effect:
     apply: Callable[[Setup, Mapping[str, float]], Setup] = field(repr=False)
     doc: str = ""
     relative: tuple[str, ...] = ()
+    #: Groups of parameters fitted one after the other (the first on a grid, the later ones
+    #: one parameter at a time from there), for effects with more parameters than a grid
+    #: can search: () fits them all together.
+    stages: tuple[tuple[str, ...], ...] = ()
+    #: Values a controller's documentation gives: (parameter, value, where it is documented).
+    #: ``ncperf calibrate`` writes the documented value when its fitted range includes it.
+    documented: tuple[tuple[str, float, str], ...] = ()
 
     def folded(self, machine: Machine) -> dict[str, float]:
         """The parameters the machine's ``[effects.NAME]`` table gives (defaults filled in),
@@ -208,14 +222,18 @@ def setup_for(machine: Machine, effects: Mapping[str, Effect], *, ramps: bool = 
 
 
 def scale_machine(
-    machine: Machine, *, accel: float = 1.0, jerk: float = 1.0, feed: float = 1.0
+    machine: Machine,
+    *,
+    accel: float | NDArray[np.float64] = 1.0,
+    jerk: float | NDArray[np.float64] = 1.0,
+    feed: float | NDArray[np.float64] = 1.0,
 ) -> Machine:
-    """The machine with its axis limits scaled."""
+    """The machine with its axis limits scaled (a scale, or one per axis X, Y, Z)."""
     return dataclasses.replace(
         machine,
-        max_acceleration=machine.max_acceleration * accel,
-        max_jerk=machine.max_jerk * jerk,
-        max_feed=machine.max_feed * feed,
+        max_acceleration=machine.max_acceleration * np.asarray(accel, dtype=np.float64),
+        max_jerk=machine.max_jerk * np.asarray(jerk, dtype=np.float64),
+        max_feed=machine.max_feed * np.asarray(feed, dtype=np.float64),
     )
 
 

@@ -188,6 +188,41 @@ class Evaluation:
         return float(np.sum(tp.length[f] / self.element_feed[f]))
 
 
+#: The indicator name and limit label of the block time on inserted corner arcs.
+BLEND_INDICATOR = "ncu_capacity"
+BLEND_LABEL = "block time (blend arc)"
+
+
+def _blend_block_time(
+    tp: ToolPath, machine: Machine, indicators: Sequence[Indicator]
+) -> list[Indicator]:
+    """Model 3 on the arcs a controller inserts at corners: an arc of length 2 travel (the
+    junction's ``travel_mm`` on each side) lasts at least the block time, so the corner
+    speed is at most 2 travel / t_int (LinuxCNC's planner executes its blend arcs as
+    segments of their own; the paper's model 3 caps programmed blocks only)."""
+    out = []
+    for ind in indicators:
+        if ind.at != "junction" or "travel_mm" not in ind.values or ind.name == BLEND_INDICATOR:
+            continue
+        travel = np.asarray(ind.values["travel_mm"], dtype=np.float64)
+        hold = np.asarray(ind.values.get("hold_mm", travel), dtype=np.float64)
+        ok = travel > 0
+        if not ok.any():
+            continue
+        out.append(
+            Indicator(
+                name=BLEND_INDICATOR,
+                at="junction",
+                index=ind.index[ok],
+                feed=2.0 * travel[ok] / machine.interpolation_time,
+                limit=np.zeros(int(ok.sum()), dtype=np.int64),
+                labels=(BLEND_LABEL,),
+                values={"hold_mm": hold[ok], "travel_mm": travel[ok]},
+            )
+        )
+    return out
+
+
 def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator]) -> Evaluation:
     """Keep, per junction and per element, the lowest feed any indicator allows."""
     tp = toolpath
@@ -197,6 +232,8 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         "junction": [],
         "element": [],
     }
+    if machine.block_time_on_blends:
+        indicators = [*indicators, *_blend_block_time(tp, machine, indicators)]
     for ind in indicators:
         if ind.name not in names:
             names.append(ind.name)

@@ -16,7 +16,7 @@ from core.engine.indicators import Evaluation, Indicator, IndicatorSource, combi
 from core.engine.profile import Profile, build_profile
 from core.model.sampling import PROJECTION_STEP, isotonic
 from core.model.tolerances import TOL
-from core.model.toolpath import ToolPath
+from core.model.toolpath import PathMode, ToolPath
 
 #: Time step of the predicted signal when time-domain effects are on (s); longer programs
 #: get a coarser step so that the signal stays under MAX_SAMPLES.
@@ -193,6 +193,9 @@ def predict(indicators_of: IndicatorSource, tp: ToolPath, setup: Setup) -> Predi
         tp2 = dataclasses.replace(tp2, feed=tp.feed * setup.feed_scale)
     if setup.tolerance is not None:
         tp2 = dataclasses.replace(tp2, tolerance=np.full(tp.n, float(setup.tolerance)))
+    if setup.exact_stop:
+        exact = np.full(tp.n, PathMode.EXACT_STOP, dtype=np.int8)
+        tp2 = dataclasses.replace(tp2, path_mode=exact)
     m = setup.machine
     indicators = indicators_of(tp2, m)
     for extra in setup.element_caps:

@@ -12,6 +12,8 @@ The TOML file speaks the paper's units (m/min, m/s^2, m/s^3, s, mm); the
     interpolation_time = 0.012         # s, t_int (model 3)
     path_tolerance = 0.01              # mm, TIT (model 1)
     curvature_transition_time = 0.012  # s, dt (model 2)
+    max_path_feed = 15.0               # m/min, all axes together (optional; default none)
+    block_time_on_blends = true        # t_int caps the inserted corner arcs too (optional)
 
 Optional, for the readers (:mod:`core.model.setup`) and rotary axes::
 
@@ -41,6 +43,7 @@ import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -66,6 +69,8 @@ CONTROLLER_KEYS = {
 #: Rotary axes' keys -> factor to deg/s, deg/s^2, deg/s^3 (max_jerk optional).
 ROTARY_KEYS = {"max_feed": 1.0 / 60.0, "max_acceleration": 1.0, "max_jerk": 1.0}
 #: Optional [controller] keys for the readers (see core.model.setup).
+#: Optional [controller] keys of the planner: max_path_feed (m/min), block_time_on_blends.
+PLANNER_KEYS = ("max_path_feed", "block_time_on_blends")
 SETUP_KEYS = (
     "default_path_mode",
     "home",
@@ -75,7 +80,7 @@ SETUP_KEYS = (
     "peck_clearance",
 )
 TOP_KEYS = ("name", "axes", "controller")
-OPTIONAL_TOP_KEYS = ("offsets", "tools")
+OPTIONAL_TOP_KEYS = ("offsets", "tools", "diagnosis")
 #: Keys that may be infinite ("no such limit"): LinuxCNC 2.9 has no jerk limit.
 MAY_BE_INFINITE = {"max_jerk"}
 
@@ -124,6 +129,17 @@ class Machine:
     normal_acceleration_factor: float = 1.0
     #: Effects the machine file switches on: (name, {param: value}, line of the table).
     effects: tuple[tuple[str, dict[str, float], int | None], ...] = ()
+    #: Path speed limit over all axes together (mm/s; LinuxCNC's [TRAJ]MAX_LINEAR_VELOCITY),
+    #: on feed moves and rapids alike; inf: the axes' own limits only.
+    max_path_feed: float = math.inf
+    #: The block time (model 3) also caps the blend arcs the controller inserts at corners,
+    #: segments it executes like any block (LinuxCNC's planner); False: programmed blocks
+    #: only, as the paper's model 3.
+    block_time_on_blends: bool = False
+    #: The gap (mm/s RMS over time) a prediction of this machine leaves on data it was not
+    #: fitted on: the noise floor of the diagnosis (``[diagnosis] noise_floor`` in mm/min,
+    #: written by ``ncperf calibrate``); NaN: none given (estimated from each trace).
+    noise_floor: float = math.nan
     #: Rotary axes the file describes ("A", "B", "C").
     rotary: dict[str, RotaryAxis] = field(default_factory=dict)
     #: What the controller holds before a program runs (home, offsets, tools...).
@@ -168,7 +184,7 @@ class Machine:
         axis at most at its max feed: min over axes of Vmax_k / |u_k|."""
         with np.errstate(divide="ignore"):
             per_axis = self.max_feed[None, :] / np.abs(direction)
-        return per_axis.min(axis=1)
+        return np.minimum(per_axis.min(axis=1), self.max_path_feed)
 
 
 # ---------------------------------------------------------------------------- loading
@@ -277,19 +293,46 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         raise MachineError(
             "'controller' must be a table", source=source, line=_line_of(text, "controller")
         )
-    _check_keys(ctrl, tuple(CONTROLLER_KEYS), "controller", source, text, SETUP_KEYS)
+    _check_keys(ctrl, tuple(CONTROLLER_KEYS), "controller", source, text, SETUP_KEYS + PLANNER_KEYS)
+    planner: dict[str, Any] = {}
+    if "max_path_feed" in ctrl:
+        v = _number(ctrl["max_path_feed"], "max_path_feed", "controller", source, text)
+        planner["max_path_feed"] = v * AXIS_KEYS["max_feed"]
+    if "block_time_on_blends" in ctrl:
+        flag = ctrl["block_time_on_blends"]
+        if not isinstance(flag, bool):
+            raise MachineError(
+                f"'block_time_on_blends' in [controller] must be true or false, got {flag!r}",
+                source=source,
+                line=_line_of(text, "block_time_on_blends", "controller"),
+            )
+        planner["block_time_on_blends"] = flag
     c = {k: _number(ctrl[k], k, "controller", source, text) * f for k, f in CONTROLLER_KEYS.items()}
+    noise_floor = math.nan
+    diag = data.get("diagnosis", {})
+    if not isinstance(diag, dict):
+        raise MachineError(
+            "'diagnosis' must be a table", source=source, line=_line_of(text, "diagnosis")
+        )
+    _check_keys(diag, (), "diagnosis", source, text, ("noise_floor",))
+    if "noise_floor" in diag:
+        noise_floor = _number(diag["noise_floor"], "noise_floor", "diagnosis", source, text) / 60.0
     setup = _setup(ctrl, data.get("offsets", {}), data.get("tools", {}), source, text)
     return Machine(
         rotary=rotary,
         setup=setup,
+        max_path_feed=planner.get("max_path_feed", math.inf),
+        block_time_on_blends=planner.get("block_time_on_blends", False),
+        noise_floor=noise_floor,
         name=name.strip(),
         max_feed=np.array(per_axis["max_feed"]),
         max_acceleration=np.array(per_axis["max_acceleration"]),
         max_jerk=np.array(per_axis["max_jerk"]),
         source=source,
         effects=effects,
-        **c,
+        interpolation_time=c["interpolation_time"],
+        path_tolerance=c["path_tolerance"],
+        curvature_transition_time=c["curvature_transition_time"],
     )
 
 
@@ -473,6 +516,20 @@ def load_preset(name: str) -> Machine:
         raise UsageError(f"unknown machine preset '{name}'; presets: {', '.join(names)}")
     res = resources.files("core.model") / "presets" / f"{name}.toml"
     return machine_from_toml_text(res.read_text(encoding="utf-8"), f"preset {name}")
+
+
+def machine_text(spec: str | None) -> str:
+    """The TOML text of a preset name or a machine file (None: the default preset), for
+    tools that write a changed copy (``ncperf calibrate``)."""
+    if spec is None or spec in preset_names():
+        name = spec or DEFAULT_PRESET
+        res = resources.files("core.model") / "presets" / f"{name}.toml"
+        return res.read_text(encoding="utf-8")
+    p = Path(spec)
+    try:
+        return p.read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as exc:
+        raise MachineError(f"cannot read machine file: {exc}", source=str(p)) from None
 
 
 def resolve_machine(spec: str | None) -> Machine:

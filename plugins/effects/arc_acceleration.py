@@ -15,6 +15,7 @@ EFFECT = Effect(
     params=(Param("factor", 0.2, 1.0, 1.0),),
     apply=lambda setup, p: setup.replace(arc_factor=p["factor"]),
     doc="tangential acceleration on arcs is a share of A",
+    documented=(("factor", 0.5, "LinuxCNC 2.9 blendmath.h: BLEND_ACC_RATIO_TANGENTIAL = 0.5"),),
 )
 
 

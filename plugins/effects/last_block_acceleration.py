@@ -17,6 +17,9 @@ EFFECT = Effect(
     params=(Param("factor", 0.2, 1.0, 1.0),),
     apply=lambda setup, p: setup.replace(end_factor=p["factor"]),
     doc="the program's last block with a share of A",
+    documented=(
+        ("factor", 0.5, "LinuxCNC 2.9 on the shared harness: 1000 of 2000 mm/s^2 on the last move"),
+    ),
 )
 
 

@@ -9,6 +9,7 @@ and arcs. Parameter: ``factor`` (0.2-1).
 from __future__ import annotations
 
 import dataclasses
+import math
 
 from core import Machine, ToolPath, hookimpl
 from core.engine.effects import Effect, ElementCap, Param, Setup, arc_caps
@@ -31,6 +32,13 @@ EFFECT = Effect(
     params=(Param("factor", 0.2, 1.0, 1.0),),
     apply=_apply,
     doc="only a share of A used for normal acceleration on corners and arcs",
+    documented=(
+        (
+            "factor",
+            math.sqrt(3.0) / 2.0,
+            "LinuxCNC 2.9 blendmath.h: BLEND_ACC_RATIO_NORMAL = sqrt(1 - 0.5^2)",
+        ),
+    ),
 )
 
 
