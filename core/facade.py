@@ -27,6 +27,7 @@ from core.view.annotations import Annotations, build_annotations
 
 if TYPE_CHECKING:
     from core.diagnosis.align import Alignment
+    from core.diagnosis.calibrate import Calibration
     from core.diagnosis.diagnose import Diagnosis
 
 
@@ -145,6 +146,18 @@ class Ncperf:
         from core.diagnosis.diagnose import diagnose_cases  # only the diagnosis pays for it
 
         return diagnose_cases(self.indicators, cases, base, baseline, effects)
+
+    def calibrate(
+        self,
+        cases: Sequence[tuple[ToolPath, Sequence[Alignment], Sequence[str]]],
+        base: Setup,
+        effects: Mapping[str, Effect],
+    ) -> Calibration:
+        """The machine of ``base`` calibrated on programs and their aligned traces, with
+        these (controller) effects (see :mod:`core.diagnosis.calibrate`)."""
+        from core.diagnosis.calibrate import calibrate  # only calibration pays for it
+
+        return calibrate(self.indicators, cases, base, effects)
 
     # command line
     def add_commands(self, subparsers: argparse._SubParsersAction) -> None:

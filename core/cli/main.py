@@ -116,6 +116,37 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     d.add_argument("--svg", metavar="OUT", help="the path coloured by gap, and feed plots")
     d.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
 
+    cal = sub.add_parser(
+        "calibrate",
+        help="fit a machine file to measured traces (checked on programs or runs it was not "
+        "fitted on)",
+    )
+    cal.set_defaults(run=cmd_calibrate)
+    cal.add_argument("program", help="tool path file (G-code or CL data)")
+    cal.add_argument("traces", nargs="+", metavar="TRACE", help="its measured traces")
+    cal.add_argument(
+        "--also",
+        nargs="+",
+        action="append",
+        metavar="PROGRAM_OR_TRACE",
+        help="another program and its traces (repeat for more programs)",
+    )
+    _common(cal)
+    cal.add_argument(
+        "--out", metavar="MACHINE.toml", required=True, help="the machine file to write"
+    )
+    cal.add_argument(
+        "--effects",
+        metavar="A,B,...",
+        help="only these controller effects (default: every one ncperf calibrates)",
+    )
+    cal.add_argument("--trace-units", choices=("mm", "inch"), help="trace units (default mm)")
+    cal.add_argument(
+        "--trace-kind",
+        choices=("setpoint", "actual"),
+        help="what the traces' positions are (default: from the reader)",
+    )
+
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
     m.set_defaults(run=cmd_machines)
     pl = sub.add_parser("plugins", help="list registered plugins and the hooks they implement")
@@ -304,6 +335,75 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
 
         written = nc.display(tp, d.annotations(), DiagnosisTarget(args.svg, d, view=args.view))
         print(f"  svg              {written}")
+    return 0
+
+
+def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
+    import datetime
+
+    from core.cli.calibration_report import machine_toml
+    from core.cli.calibration_report import report as cal_report
+    from core.diagnosis.align import align
+    from core.diagnosis.calibrate import CONTROLLER_EFFECTS
+    from core.engine.effects import setup_for
+    from core.model.machine import machine_from_toml_text, machine_text
+    from core.model.trace import TraceOptions
+
+    _check_output(args.out)
+    groups = [[args.program, *args.traces], *(args.also or [])]
+    for g in groups:
+        if len(g) < 2:
+            raise UsageError(f"--also {g[0]}: give the program and at least one trace")
+    machine, note = _machine(args)
+    effects = nc.effects()
+    names = [e for e in CONTROLLER_EFFECTS if e in effects]
+    if args.effects:
+        wanted = [e.strip() for e in args.effects.split(",") if e.strip()]
+        unknown = [e for e in wanted if e not in names]
+        if unknown:
+            raise UsageError(
+                f"cannot calibrate {', '.join(unknown)} (controller effects: {', '.join(names)})"
+            )
+        names = wanted
+    options = TraceOptions(units=args.trace_units, kind=args.trace_kind)
+    cases, all_labels = [], []
+    for program, *traces in groups:
+        tp = nc.extract(program, _options(args, machine))
+        _print_notices(tp.notices, sys.stderr)
+        als, labels = [], []
+        for path in traces:
+            tr = nc.read_trace(path, options)
+            _print_notices(tr.notices, sys.stderr)
+            al = align(tp, tr)
+            if not al.ok:
+                raise InputError(f"{al.message}; no calibration", source=path)
+            als.append(al)
+            labels.append(Path(path).name)
+        cases.append((tp, als, labels))
+        all_labels += labels
+    base = setup_for(machine, effects, ramps=True)
+    cal = nc.calibrate(cases, base, {k: effects[k] for k in names})
+    header = "\n".join(
+        [
+            f"Made by ncperf calibrate ({__version__}) on {datetime.date.today()} from",
+            f"the machine {machine.name!r} and {len(all_labels)} trace(s) of "
+            f"{len(groups)} program(s):",
+            *(f"  {Path(g[0]).name}: {', '.join(Path(t).name for t in g[1:])}" for g in groups),
+            f"Held out: {cal.held_out}.",
+            "Held-out gap (RMS over time, measured - predicted feed), start -> calibrated: "
+            + "; ".join(
+                f"fold {'AB'[k]} {b:.1f} -> {a:.1f} mm/min"
+                for k, (b, a) in enumerate(zip(cal.gap_before, cal.gap_after, strict=True))
+            ),
+            f"Effects tried: {', '.join(cal.tried)}.",
+            "Calibrated: " + (", ".join(c.name for c in cal.effects) or "nothing") + ".",
+        ]
+    )
+    text = machine_toml(cal, machine_text(args.machine), machine, effects, header=header)
+    machine_from_toml_text(text, args.out)  # what is written must load
+    with atomic_writer(args.out) as fh:
+        fh.write(text)
+    print(cal_report(cal, start=machine.name + note, out=args.out, labels=all_labels))
     return 0
 
 

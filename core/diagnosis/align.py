@@ -99,6 +99,9 @@ class Alignment:
 #: Most iterations of the rigid offset fit (it stops once a step is under TOL.offset_step;
 #: halving steps reach 1e-4 mm from a 1 mm start in about 14).
 OFFSET_ITERATIONS = 60
+#: An offset is kept only where it brings the trace this much closer to the path (median
+#: distance, mm) than none: an offset the path cannot pin down is not reported.
+OFFSET_GAIN = 0.01
 
 
 def _nearest(
@@ -193,13 +196,14 @@ def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples) 
     cands = [np.zeros(3), q[0] - tp.start[0], np.median(q, axis=0) - np.median(pts, axis=0)]
     sub = q[:: max(1, q.shape[0] // 2000)]
     sub_lines = None if lines is None else lines[:: max(1, q.shape[0] // 2000)]
-    best, best_d = np.zeros(3), np.inf
+    meds = []
     for off in cands:
         _, d = _project(tp, sub - off, sub_lines, path)
-        med = float(np.median(d))
-        if med < best_d:
-            best, best_d = off, med
-    off = best
+        meds.append(float(np.median(d)))
+    # No offset unless a candidate fits clearly better: along a direction the path does not
+    # constrain (a program along one line) every offset fits alike, and none is the answer.
+    k = int(np.argmin(meds))
+    off = cands[k] if meds[0] - meds[k] > max(OFFSET_GAIN, 0.5 * meds[0]) else cands[0]
     # Each step removes a share of the remaining error (about half, where corners pull the
     # projections sideways), so the fit runs to convergence, not a fixed count: six halvings
     # left 0.11 mm on a real 840D recording.
@@ -210,6 +214,9 @@ def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples) 
         off = off + step
         if np.linalg.norm(step) < TOL.offset_step:
             break
+    _, d_off = _project(tp, sub - off, sub_lines, path)
+    if meds[0] - float(np.median(d_off)) <= OFFSET_GAIN:
+        return np.zeros(3)
     return off
 
 

@@ -367,7 +367,10 @@ def decide(
         r
         for r in ok
         if r.held_out_gap_after - lead.held_out_gap_after <= margin
-        or sign_flip_p(r.chunk_sq, lead.chunk_sq) > TIE_P
+        or (
+            r.held_out_gap_after - lead.held_out_gap_after < floor
+            and sign_flip_p(r.chunk_sq, lead.chunk_sq) > TIE_P
+        )
     ]
     order = {name: k for k, name in enumerate(EFFECT_PRIORITY)}
     best = min(equal, key=lambda r: (r.moved, order.get(r.name, len(order)), r.held_out_gap_after))

@@ -49,8 +49,9 @@ STRONG_K = 3.0
 NOISE_K = 2.0
 MIN_FEED_SHARE = 0.002
 BEST_SHARE = 0.10
-#: Effects not significantly worse than the best (the same test gives p > TIE_P, or within TIE_SHARE
-#: of what the best removes) explain the data equally well: the one with the fewest
+#: Effects not worse than the best by more than the floor nor significantly (the same test
+#: gives p > TIE_P), or within TIE_SHARE of what the best removes, explain the data equally
+#: well: the one with the fewest
 #: parameters the data moved is named, then the one first in EFFECT_PRIORITY (what a
 #: controller more often does, and the simpler story, comes first).
 TIE_P = 0.05

@@ -1,0 +1,330 @@
+"""Calibrating a machine from measured traces (``ncperf calibrate``).
+
+The diagnosis asks which ONE unmodelled effect explains a trace; calibration asks what the
+machine IS: the controller's own values (per-axis speed, acceleration and jerk, block time,
+path tolerance, path mode, path speed limit, the acceleration shares its planner keeps),
+fitted on several programs or runs and checked on others.
+
+1. The traces are resampled as for the diagnosis and cut into two folds: other programs
+   (with two or more programs: every other program, whole), else other runs, else
+   alternate stretches of the one run (:func:`folds`).
+2. Forward selection on fold A: every controller effect is fitted on A's calibration part
+   on top of what is already chosen, and the one that removes most of the held-out gap is
+   added while it clears the diagnosis's test (:func:`core.diagnosis.diagnose.clears`, with
+   CAL_ADD_SHARE of what is left) -- so an effect the data cannot see stays out.
+3. The chosen effects are refitted, in the same order, with the folds swapped (fold B): two
+   values of every parameter, each fitted on data the other was measured on.
+4. The value written is their mean (geometric for scales), and its range is what the two
+   folds and a scan of the whole data allow (the gap within RANGE_SHARE of its least). A
+   documented value inside that range is written instead (the comment says so).
+5. The noise floor is the held-out gap the calibrated machine leaves, fold by fold (each
+   with its own fit): what a diagnosis with this machine must beat to name an effect.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+
+import numpy as np
+
+from core.diagnosis.align import Alignment
+from core.diagnosis.diagnose import noise_floor, sign_flip_p
+from core.diagnosis.fit import fit, predict_all
+from core.diagnosis.resample import Data, gap, held_out_chunks, pieces, resample, split
+from core.diagnosis.rules import SIG_P, STRONG_K
+from core.engine.effects import Effect, Setup
+from core.engine.indicators import IndicatorSource
+from core.engine.predict import Prediction
+from core.model.errors import UsageError
+from core.model.tolerances import TOL
+from core.model.toolpath import ToolPath
+
+#: The effects that are what a controller does (a feed override is the operator's).
+CONTROLLER_EFFECTS = (
+    "axis_dynamics",
+    "block_cycle_time",
+    "corner_tolerance",
+    "exact_stop",
+    "path_feed_limit",
+    "normal_acceleration_factor",
+    "arc_acceleration",
+    "last_block_acceleration",
+    "servo_lag",
+    "jerk_filter",
+)
+#: An effect joins while it removes at least this share of what is left (and the floor).
+CAL_ADD_SHARE = 0.05
+#: Most effects calibrated together.
+CAL_MAX = 6
+#: A parameter's range: values whose gap on all the data is within this share of the least
+#: (or within the noise floor of it); found from a first step (a share of the parameter's
+#: span, or of its value for log parameters) doubling outwards, then bisected.
+RANGE_SHARE = 0.01
+RANGE_FIRST_STEP = 0.005
+RANGE_BISECT = 5
+
+
+@dataclass(frozen=True)
+class Calibrated:
+    """One effect of the calibrated machine.
+
+    Attributes
+    ----------
+    name : str
+    params : {name: value}
+        What is written (the folds' mean, or a documented value inside the range).
+    folds : tuple of {name: value}
+        The value fitted on each fold.
+    ranges : {name: (low, high)}
+    documented : {name: str}
+        Where a written value is documented (parameters that took the documented value).
+    gap_before, gap_after : float
+        Held-out gap of fold A (mm/min) before and after this effect joined.
+    """
+
+    name: str
+    params: dict[str, float]
+    folds: tuple[dict[str, float], ...]
+    ranges: dict[str, tuple[float, float]]
+    documented: dict[str, str]
+    gap_before: float
+    gap_after: float
+
+
+@dataclass(frozen=True, eq=False)
+class Calibration:
+    """The result of :func:`calibrate`.
+
+    Attributes
+    ----------
+    effects : tuple of Calibrated
+        In the order they joined.
+    setup : Setup
+        The start setup with every calibrated effect applied (the written values).
+    held_out : str
+        How the folds were made.
+    gap_before, gap_after : tuple of float
+        Held-out gap (mm/min) of each fold, with the start machine and calibrated (each
+        fold with its own fit).
+    noise_floor : float
+        mm/min: the RMS of ``gap_after`` over the folds.
+    tried : tuple of str
+        The effects tried.
+    """
+
+    effects: tuple[Calibrated, ...]
+    setup: Setup
+    held_out: str
+    gap_before: tuple[float, ...]
+    gap_after: tuple[float, ...]
+    noise_floor: float
+    tried: tuple[str, ...]
+
+
+def folds(data: Sequence[Data]) -> tuple[list[Data], list[Data], str]:
+    """Two folds (calibration / held-out masks swapped between them); see the module
+    docstring."""
+    programs = sorted({d.case for d in data})
+    if len(programs) >= 2:
+        a = [dataclasses.replace(d, calibration=np.full(d.s.size, d.case % 2 == 0)) for d in data]
+        a = [dataclasses.replace(d, chunk=pieces(d)) for d in a]
+        how = (
+            f"other programs: {len(programs)} programs, every other one fitted and the others "
+            "measured, then the other way round"
+        )
+    else:
+        a, how = split(data)
+        how += ", then the other way round"
+    b = [dataclasses.replace(d, calibration=~d.calibration) for d in a]
+    return a, b, how
+
+
+def _select(
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    base: Setup,
+    effects: Mapping[str, Effect],
+    data: Sequence[Data],
+    floor: float,
+) -> list[tuple[str, dict[str, float], float, float]]:
+    """Forward selection on one fold: (effect, params, gap before, gap after) in order."""
+    current = base
+    preds = predict_all(indicators_of, tps, current)
+    g_now = gap(preds, data, "held_out")
+    sq_now = held_out_chunks(preds, data)[0]
+    chosen: list[tuple[str, dict[str, float], float, float]] = []
+    while len(chosen) < CAL_MAX:
+        trials = []
+        for name, eff in effects.items():
+            if any(c[0] == name for c in chosen):
+                continue
+            params, p = fit(indicators_of, tps, current, eff, data)
+            trials.append((gap(p, data, "held_out"), name, params, p))
+        if not trials:
+            break
+        g_new, name, params, p = min(trials, key=lambda x: x[0])
+        sq_new = held_out_chunks(p, data)[0]
+        gain = g_now - g_new
+        significant = sign_flip_p(sq_now, sq_new) <= SIG_P or gain >= STRONG_K * floor
+        if g_now <= 0 or gain / g_now < CAL_ADD_SHARE or gain < floor or not significant:
+            break
+        chosen.append((name, params, g_now, g_new))
+        current = effects[name].apply(current, params)
+        g_now, sq_now = g_new, sq_new
+    return chosen
+
+
+def _refit(
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    base: Setup,
+    effects: Mapping[str, Effect],
+    names: Sequence[str],
+    data: Sequence[Data],
+) -> tuple[list[dict[str, float]], list[Prediction]]:
+    """The named effects fitted in order on one fold; the params and the last predictions."""
+    current = base
+    out = []
+    preds = predict_all(indicators_of, tps, current)
+    for name in names:
+        params, preds = fit(indicators_of, tps, current, effects[name], data)
+        out.append(params)
+        current = effects[name].apply(current, params)
+    return out, preds
+
+
+def _mean(eff: Effect, values: Sequence[Mapping[str, float]]) -> dict[str, float]:
+    out = {}
+    for p in eff.params:
+        xs = [float(v[p.name]) for v in values]
+        if p.log and min(xs) > 0:
+            m = math.exp(sum(math.log(x) for x in xs) / len(xs))
+        else:
+            m = sum(xs) / len(xs)
+        out[p.name] = float(round(m)) if p.integer else m
+    return out
+
+
+def calibrate(
+    indicators_of: IndicatorSource,
+    cases: Sequence[tuple[ToolPath, Sequence[Alignment], Sequence[str]]],
+    base: Setup,
+    effects: Mapping[str, Effect],
+) -> Calibration:
+    """Calibrate the machine of ``base`` on the programs and their aligned traces (see the
+    module docstring); ``effects``: those that may be calibrated."""
+    tps = [tp for tp, _, _ in cases]
+    data = [
+        resample(tp, al, lab, case=k)
+        for k, (tp, als, labs) in enumerate(cases)
+        for al, lab in zip(als, labs, strict=True)
+    ]
+    if not data or all(d.s.size == 0 for d in data):
+        raise UsageError("no measured feed moves to calibrate on")
+    fold_a, fold_b, how = folds(data)
+    floor, _ = noise_floor(base, fold_a)
+    chosen = _select(indicators_of, tps, base, effects, fold_a, floor)
+    names = [c[0] for c in chosen]
+    params_b, preds_b = _refit(indicators_of, tps, base, effects, names, fold_b)
+    before = predict_all(indicators_of, tps, base)
+    gaps_before = (gap(before, fold_a, "held_out"), gap(before, fold_b, "held_out"))
+    current = base
+    for name, params, _, _ in chosen:
+        current = effects[name].apply(current, params)
+    preds_a = predict_all(indicators_of, tps, current)
+    gaps_after = (gap(preds_a, fold_a, "held_out"), gap(preds_b, fold_b, "held_out"))
+
+    # The written values, their ranges, documented values inside them.
+    everything = [dataclasses.replace(d, calibration=np.ones(d.s.size, dtype=bool)) for d in data]
+    final = base
+    out = []
+    for k, (name, params_a, g0, g1) in enumerate(chosen):
+        eff = effects[name]
+        values = _mean(eff, [params_a, params_b[k]])
+        ranges: dict[str, tuple[float, float]] = {}
+        documented: dict[str, str] = {}
+        if eff.params:
+            ranges = _ranges(indicators_of, tps, final, eff, values, everything, floor)
+            for p in eff.params:
+                lo = min(ranges[p.name][0], params_a[p.name], params_b[k][p.name])
+                hi = max(ranges[p.name][1], params_a[p.name], params_b[k][p.name])
+                ranges[p.name] = (lo, hi)
+            for pname, value, where in eff.documented:
+                lo, hi = ranges[pname]
+                if lo <= value <= hi:
+                    values[pname] = value
+                    documented[pname] = where
+        final = eff.apply(final, values)
+        out.append(
+            Calibrated(
+                name=name,
+                params=values,
+                folds=(dict(params_a), dict(params_b[k])),
+                ranges=ranges,
+                documented=documented,
+                gap_before=g0,
+                gap_after=g1,
+            )
+        )
+    floor_value = math.sqrt(sum(g * g for g in gaps_after) / len(gaps_after))
+    return Calibration(
+        effects=tuple(out),
+        setup=final,
+        held_out=how,
+        gap_before=gaps_before,
+        gap_after=gaps_after,
+        noise_floor=floor_value,
+        tried=tuple(effects),
+    )
+
+
+def _ranges(
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    base: Setup,
+    eff: Effect,
+    values: Mapping[str, float],
+    data: Sequence[Data],
+    floor: float,
+) -> dict[str, tuple[float, float]]:
+    """Per parameter (the others at ``values``): the values around the written one whose
+    gap on all the data is within RANGE_SHARE of its gap, or within the noise floor of it
+    (values the data cannot tell apart): steps doubling outwards until one is out, then
+    bisection of the edge (RANGE_BISECT rounds)."""
+    out: dict[str, tuple[float, float]] = {}
+    for p in eff.params:
+        v0 = float(values[p.name])
+
+        def gap_at(x: float, name: str = p.name) -> float:
+            preds = predict_all(indicators_of, tps, eff.apply(base, dict(values) | {name: x}))
+            return gap(preds, data, "calibration")
+
+        g0 = gap_at(v0)
+        limit = g0 + max(RANGE_SHARE * g0, floor) + TOL.float_slack
+        log = p.log and v0 > 0 and p.low > 0
+        edges = []
+        for sign in (-1.0, 1.0):
+            inside, step, edge = v0, RANGE_FIRST_STEP, None
+            while True:
+                x = v0 * math.exp(sign * step) if log else v0 + sign * step * (p.high - p.low)
+                x = min(max(x, p.low), p.high)
+                if gap_at(x) > limit:
+                    edge = x
+                    break
+                inside = x
+                if x in (p.low, p.high):
+                    break
+                step *= 2.0
+            if edge is not None:
+                for _ in range(RANGE_BISECT):
+                    mid = math.sqrt(inside * edge) if log else 0.5 * (inside + edge)
+                    if gap_at(mid) > limit:
+                        edge = mid
+                    else:
+                        inside = mid
+            edges.append(inside)
+        out[p.name] = (min(edges), max(edges))
+    return out
