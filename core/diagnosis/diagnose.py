@@ -221,7 +221,13 @@ def diagnose_cases(
         p = sign_flip_p(sq_before, sq_after)
         results[k] = dataclasses.replace(r, moved=moved, p=p, chunk_sq=sq_after)
     floor, floor_source = noise_floor(base, data)
-    results, best, reason = decide(results, floor)
+    # effects whose values the machine file sets (absolute, not a further factor on top)
+    folded = frozenset(
+        name
+        for name, _, _ in base.machine.effects
+        if name in effects and not effects[name].relative
+    )
+    results, best, reason = decide(results, floor, folded)
 
     chosen: list[str] = []
     chosen_params: dict[str, dict[str, float]] = {}
@@ -328,12 +334,13 @@ def noise_floor(base: Setup, data: Sequence[Data]) -> tuple[float, str]:
 
 
 def decide(
-    results: Sequence[EffectResult], floor: float
+    results: Sequence[EffectResult], floor: float, folded: frozenset[str] = frozenset()
 ) -> tuple[list[EffectResult], str | None, str]:
     """Rank the effects and name the best one, or none (see the module docstring).
 
-    Returns the effects in rank order (the named or leading one first, then by held-out
-    gap), the named effect and the reason in one sentence."""
+    ``folded``: effects the machine file already sets (calibrated): among equally good
+    effects they come last. Returns the effects in rank order (the named or leading one
+    first, then by held-out gap), the named effect and the reason in one sentence."""
     ranked = sorted(results, key=lambda r: r.held_out_gap_after)
     if not ranked:
         return ranked, None, "no effects to try"
@@ -373,7 +380,16 @@ def decide(
         )
     ]
     order = {name: k for k, name in enumerate(EFFECT_PRIORITY)}
-    best = min(equal, key=lambda r: (r.moved, order.get(r.name, len(order)), r.held_out_gap_after))
+    # an effect the machine file already calibrates (``folded``) is the less likely story
+    best = min(
+        equal,
+        key=lambda r: (
+            r.name in folded,
+            r.moved,
+            order.get(r.name, len(order)),
+            r.held_out_gap_after,
+        ),
+    )
     ranked.remove(best)
     ranked.insert(0, best)
     others = [r.name for r in equal if r is not best]

@@ -51,8 +51,9 @@ MIN_FEED_SHARE = 0.002
 BEST_SHARE = 0.10
 #: Effects not worse than the best by more than the floor nor significantly (the same test
 #: gives p > TIE_P), or within TIE_SHARE of what the best removes, explain the data equally
-#: well: the one with the fewest
-#: parameters the data moved is named, then the one first in EFFECT_PRIORITY (what a
+#: well: one the machine file does not already set is named before one it does (its value
+#: was calibrated), then the one with the fewest parameters the data moved, then the one
+#: first in EFFECT_PRIORITY (what a
 #: controller more often does, and the simpler story, comes first).
 TIE_P = 0.05
 TIE_SHARE = 0.05

@@ -1,0 +1,415 @@
+"""The blind diagnosis benchmark: programs and settings the diagnosis was not tuned on.
+
+Not a test: ``python benchmarks/blind_linuxcnc.py --seeds tune|score [--cache DIR]
+[--jobs 2] [--only N]`` (needs LinuxCNC and ../shared/tools/linuxcnc; the traces are
+recorded in real time, about 25 min per seed set, and cached).
+
+Programs come from ten families (benchmarks/blind/families.py: random polygons, trochoidal
+slots, gears of chords, free-form chord paths, spiral pockets, a dome raster, engraving,
+thread milling, a 2.5D part, long kinked lines), each drawn from a seed. Two seed sets are
+kept apart: ``tune`` (seeds 100-999), used while developing the effects and the decision
+rule, and ``score`` (seeds 9000-9999), run for the figures in the README and never for
+tuning. Every case is one program run through LinuxCNC 2.9's real planner on the harness's
+default mill with ONE setting changed (per-axis acceleration or speed, servo period, the
+path tolerance the run blends with, feed override below and above 1, the path speed limit,
+exact stop) or an effect put on the unchanged trace afterwards (a servo lag, a setpoint
+filter); the controls are the unchanged machine. Each trace is diagnosed on its own, as a
+user would: ``ncperf diagnose PROGRAM TRACE --machine linuxcnc-sim --baseline profile``
+with the program as written (not as changed for the run). Printed: every case, the
+confusion table (changed setting against the effect named first), the hit rate, the false
+alarms on the controls, and the cycle-time error of the preset on the controls.
+"""
+
+from __future__ import annotations
+
+import argparse
+import datetime
+import math
+import multiprocessing as mp
+import pickle
+import re
+import shutil
+import subprocess
+import sys
+import time
+from collections import Counter, defaultdict
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+from blind.families import FAMILIES, program  # benchmarks/ is the script's folder
+
+ROOT = Path(__file__).resolve().parents[1]
+SHARED = ROOT.parent / "shared"
+HARNESS = SHARED / "tools" / "linuxcnc" / "run_trace.sh"
+INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
+SEEDS = {"tune": 100, "score": 9000}
+#: Programs per changed setting.
+PER_VARIANT = 4
+
+ALL = tuple(FAMILIES)
+CORNERS = ("random_polygons", "kinked_lines", "part_25d", "engraving", "gear", "trochoid")
+SHORT = ("gear", "freeform", "dome", "engraving")
+FAST = ("random_polygons", "kinked_lines", "freeform", "spiral_pocket", "part_25d")
+ZMOTION = ("dome", "thread_milling", "part_25d", "engraving")
+MOVING = ("random_polygons", "kinked_lines", "freeform", "gear", "part_25d", "trochoid")
+
+
+def axis_sets(axes: str, acc: float | None = None, vel: float | None = None) -> list[str]:
+    """--set overrides for the axes (and their joints) named; the trajectory's linear
+    acceleration follows when all three axes change, its speed limit never."""
+    out = []
+    for a in axes:
+        j = "XYZ".index(a)
+        for sec in (f"AXIS_{a}", f"JOINT_{j}"):
+            if acc is not None:
+                out.append(f"{sec}.MAX_ACCELERATION={acc:g}")
+            if vel is not None:
+                out.append(f"{sec}.MAX_VELOCITY={vel:g}")
+    if axes == "XYZ" and acc is not None:
+        out += [
+            f"TRAJ.MAX_LINEAR_ACCELERATION={acc:g}",
+            f"TRAJ.DEFAULT_LINEAR_ACCELERATION={acc:g}",
+        ]
+    # (the path speed limit, [TRAJ]MAX_LINEAR_VELOCITY, stays: it is a setting of its own)
+    return out
+
+
+@dataclass(frozen=True)
+class Variant:
+    key: str
+    label: str
+    effect: str | None
+    families: tuple[str, ...]
+    sets: tuple[str, ...] = ()
+    override: float = 1.0
+    program: str | None = None  # "P<tol>" or "G61.1": how the run's program differs
+    post: tuple[str, float] | None = None  # (effect, seconds) put on the unchanged trace
+
+
+VARIANTS = (
+    Variant(
+        "acc_x",
+        "X acceleration 800 mm/s^2",
+        "axis_dynamics",
+        MOVING,
+        tuple(axis_sets("X", acc=800)),
+    ),
+    Variant(
+        "acc_y",
+        "Y acceleration 700 mm/s^2",
+        "axis_dynamics",
+        MOVING,
+        tuple(axis_sets("Y", acc=700)),
+    ),
+    Variant(
+        "acc_z",
+        "Z acceleration 500 mm/s^2",
+        "axis_dynamics",
+        ZMOTION,
+        tuple(axis_sets("Z", acc=500)),
+    ),
+    Variant(
+        "acc_all",
+        "all axes 1200 mm/s^2",
+        "axis_dynamics",
+        MOVING,
+        tuple(axis_sets("XYZ", acc=1200)),
+    ),
+    Variant(
+        "acc_mix",
+        "X 3000, Y 800, Z 1500 mm/s^2",
+        "axis_dynamics",
+        MOVING,
+        tuple(axis_sets("X", acc=3000) + axis_sets("Y", acc=800) + axis_sets("Z", acc=1500)),
+    ),
+    Variant("vel_x", "X speed 40 mm/s", "axis_dynamics", FAST, tuple(axis_sets("X", vel=40))),
+    Variant("vel_all", "all axes 50 mm/s", "axis_dynamics", FAST, tuple(axis_sets("XYZ", vel=50))),
+    Variant(
+        "servo2", "servo period 2 ms", "block_cycle_time", SHORT, ("EMCMOT.SERVO_PERIOD=2000000",)
+    ),
+    Variant(
+        "servo3", "servo period 3 ms", "block_cycle_time", SHORT, ("EMCMOT.SERVO_PERIOD=3000000",)
+    ),
+    Variant(
+        "servo4", "servo period 4 ms", "block_cycle_time", SHORT, ("EMCMOT.SERVO_PERIOD=4000000",)
+    ),
+    Variant("tol_fine", "blended with G64 P0.001", "corner_tolerance", CORNERS, program="P0.001"),
+    Variant("tol_05", "blended with G64 P0.05", "corner_tolerance", CORNERS, program="P0.05"),
+    Variant("tol_coarse", "blended with G64 P0.1", "corner_tolerance", CORNERS, program="P0.1"),
+    Variant("ovr_80", "feed override 0.8", "feed_override", ALL, override=0.8),
+    Variant("ovr_120", "feed override 1.2", "feed_override", ALL, override=1.2),
+    Variant(
+        "path_v",
+        "path speed limit 40 mm/s",
+        "path_feed_limit",
+        FAST,
+        ("TRAJ.MAX_LINEAR_VELOCITY=40",),
+    ),
+    # G61.1: LinuxCNC's exact stop (its G61 is exact PATH: no blending, but no stop where
+    # segments are tangent)
+    Variant("exact", "exact stop (G61.1)", "exact_stop", MOVING, program="G61.1"),
+    Variant(
+        "lag_5", "actual positions, 5 ms servo lag", "servo_lag", CORNERS, post=("servo_lag", 0.005)
+    ),
+    Variant(
+        "lag_20",
+        "actual positions, 20 ms servo lag",
+        "servo_lag",
+        CORNERS,
+        post=("servo_lag", 0.02),
+    ),
+    Variant(
+        "lag_60",
+        "actual positions, 60 ms servo lag",
+        "servo_lag",
+        CORNERS,
+        post=("servo_lag", 0.06),
+    ),
+    Variant("filt_10", "setpoint filter 10 ms", "jerk_filter", CORNERS, post=("jerk_filter", 0.01)),
+    Variant("filt_30", "setpoint filter 30 ms", "jerk_filter", CORNERS, post=("jerk_filter", 0.03)),
+    Variant("filt_60", "setpoint filter 60 ms", "jerk_filter", CORNERS, post=("jerk_filter", 0.06)),
+)
+CONTROL = Variant("unchanged", "unchanged machine", None, ALL)
+
+
+@dataclass(frozen=True)
+class Case:
+    variant: Variant
+    family: str
+    seed: int
+
+    @property
+    def name(self) -> str:
+        return f"{self.family}_{self.seed}"
+
+
+def cases(seeds: str) -> list[Case]:
+    """The cases of a seed set: PER_VARIANT programs per variant, drawn from its families in
+    a seeded order, and one control per family."""
+    base = SEEDS[seeds]
+    rng = np.random.default_rng(base)
+    out = []
+    for k, v in enumerate(VARIANTS):
+        fams = list(rng.permutation(list(v.families)))
+        while len(fams) < PER_VARIANT:
+            fams += fams
+        for j, fam in enumerate(fams[:PER_VARIANT]):
+            out.append(Case(v, fam, base + 10 * k + j))
+    for j, fam in enumerate(ALL):
+        out.append(Case(CONTROL, fam, base + 500 + j))
+    return out
+
+
+def _run_program(case: Case, cache: Path) -> Path:
+    """The program file for the run (the program as written, or changed for the run)."""
+    text = program(case.family, case.seed)
+    plain = cache / f"{case.name}.ngc"
+    if not plain.exists():
+        plain.write_text(text)
+    v = case.variant
+    if v.program is None:
+        return plain
+    changed = cache / f"{case.name}.{v.key}.ngc"
+    if v.program == "G61.1":
+        run_text = text.replace("G64 P0.01 Q0", "G61.1")
+    else:
+        run_text = re.sub(r"G64 P0\.01 Q0", f"G64 {v.program} Q0", text)
+    changed.write_text(run_text)
+    return changed
+
+
+def record(case: Case, cache: Path) -> Path:
+    """The trace of a case (recorded once, cached)."""
+    v = case.variant
+    if v.post is not None:
+        plain = record(Case(CONTROL, case.family, case.seed), cache)
+        out = cache / f"{case.name}.{v.key}.csv"
+        if not out.exists():
+            post_process(plain, out, *v.post)
+        return out
+    out = cache / f"{case.name}.{v.key}.csv"
+    if out.exists():
+        return out
+    prog = _run_program(case, cache)
+    cmd = ["bash", str(HARNESS), str(prog), str(INI), str(out) + ".part"]
+    for s in v.sets:
+        cmd += ["--set", s]
+    if v.override != 1.0:
+        cmd += ["--feed-override", repr(v.override)]
+    r = subprocess.run(cmd, capture_output=True, text=True)
+    if r.returncode != 0:
+        raise SystemExit(f"{prog}: the LinuxCNC harness failed:\n{r.stderr[-2000:]}")
+    Path(str(out) + ".part").rename(out)
+    return out
+
+
+def post_process(src: Path, out: Path, effect: str, seconds: float) -> None:
+    """A trace of the unchanged machine with an effect LinuxCNC does not have: positions
+    behind a first-order lag per axis (actual positions; v stays the planner's), or
+    positions and v smoothed by a causal moving average (a setpoint filter)."""
+    with open(src) as fh:
+        names = fh.readline().strip().split(",")
+    data = np.loadtxt(src, delimiter=",", skiprows=1)
+    col = {n: k for k, n in enumerate(names)}
+    dt = float(np.median(np.diff(data[:, col["t"]])))
+    pos = data[:, [col["x"], col["y"], col["z"]]]
+    v = data[:, col["v"]]
+    if effect == "servo_lag":
+        rest = int(8 * seconds / dt)
+        pos = np.concatenate([pos, np.repeat(pos[-1:], rest, axis=0)])
+        a = math.exp(-dt / seconds)
+        out_pos = pos.copy()
+        for i in range(1, pos.shape[0]):
+            out_pos[i] = a * out_pos[i - 1] + (1 - a) * pos[i]
+        v = np.concatenate([v, np.zeros(rest)])
+    else:
+        k = max(int(round(seconds / dt)), 1)
+        pos = np.concatenate([pos, np.repeat(pos[-1:], k, axis=0)])
+        v = np.concatenate([v, np.zeros(k)])
+        kernel = np.ones(k) / k
+        pad = np.concatenate([np.repeat(pos[:1], k - 1, axis=0), pos])
+        out_pos = np.column_stack([np.convolve(pad[:, j], kernel, "valid") for j in range(3)])
+        v = np.convolve(np.concatenate([np.zeros(k - 1), v]), kernel, "valid")
+    m = out_pos.shape[0]
+    line = data[:, col["line"]]
+    line = np.concatenate([line, np.full(m - line.size, line[-1])])
+    t = data[0, col["t"]] + np.arange(m) * dt
+    table = np.column_stack([t, out_pos, v, line])
+    tmp = Path(str(out) + ".part")
+    np.savetxt(
+        tmp,
+        table,
+        delimiter=",",
+        header="t,x,y,z,v,line",
+        comments="",
+        fmt=["%.4f", "%.6f", "%.6f", "%.6f", "%.6f", "%d"],
+    )
+    tmp.rename(out)
+
+
+def diagnose_case(args: tuple[Case, str]) -> dict:
+    """Diagnose one case on its own (run in a worker)."""
+    case, cache = args
+    from core import Ncperf
+    from core.diagnosis.align import align
+    from core.engine.effects import setup_for
+    from core.model.machine import resolve_machine
+
+    nc = Ncperf()
+    effects = nc.effects()
+    base = setup_for(resolve_machine("linuxcnc-sim"), effects, ramps=True)
+    prog = Path(cache) / f"{case.name}.ngc"
+    trace = Path(cache) / f"{case.name}.{case.variant.key}.csv"
+    t0 = time.perf_counter()
+    tp = nc.extract(str(prog))
+    tr = nc.read_trace(str(trace))
+    al = align(tp, tr)
+    d = nc.diagnose([(tp, [al], [case.name])], base, "profile", effects)
+    top = d.effects[0]
+    measured = float(tr.t[-1] - tr.t[0]) if tr.t.size else math.nan
+    predicted = float(d.before.profile.cycle_time) if d.before.profile is not None else math.nan
+    return {
+        "case": case,
+        "named": d.best_effect or "none",
+        "chosen": d.chosen,
+        "top": top.name,
+        "removed": top.removed,
+        "gap": top.held_out_gap_before,
+        "measured_s": measured,
+        "predicted_s": predicted,
+        "wall": time.perf_counter() - t0,
+        "floor": d.floor,
+        "reason": d.reason,
+        # every effect's evidence, for studying the decision rule on the tuning seeds
+        "effects": [
+            (
+                r.name,
+                r.params,
+                r.held_out_gap_before,
+                r.held_out_gap_after,
+                r.moved,
+                r.p,
+                r.chunk_sq,
+            )
+            for r in d.effects
+        ],
+    }
+
+
+def main() -> int:
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--seeds", choices=tuple(SEEDS), required=True)
+    ap.add_argument("--cache", default=None, help="where traces are kept (default /tmp/...)")
+    ap.add_argument("--jobs", type=int, default=2)
+    ap.add_argument("--only", type=int, default=0, help="the first N cases (0: all)")
+    ap.add_argument("--record-only", action="store_true")
+    ap.add_argument("--dump", default=None, help="pickle every case's evidence here")
+    args = ap.parse_args()
+    if shutil.which("linuxcnc") is None or not HARNESS.exists():
+        print("needs LinuxCNC and ../shared/tools/linuxcnc", file=sys.stderr)
+        return 1
+    cache = Path(args.cache or f"/tmp/ncperf-blind-{args.seeds}")
+    cache.mkdir(parents=True, exist_ok=True)
+    todo = cases(args.seeds)
+    if args.only:
+        todo = todo[: args.only]
+    for k, c in enumerate(todo):
+        record(c, cache)
+        print(f"recorded {k + 1}/{len(todo)} {c.name} {c.variant.key}", file=sys.stderr, flush=True)
+    if args.record_only:
+        return 0
+    with mp.get_context("fork").Pool(args.jobs) as pool:
+        results = pool.map(diagnose_case, [(c, str(cache)) for c in todo])
+    if args.dump:
+        with open(args.dump, "wb") as fh:
+            pickle.dump(results, fh)
+    print(
+        f"Blind diagnosis benchmark, seed set '{args.seeds}' (seeds from {SEEDS[args.seeds]}), "
+        f"{datetime.date.today()}: LinuxCNC 2.9, one setting changed per trace; "
+        "`ncperf diagnose --machine linuxcnc-sim --baseline profile`, each trace on its own"
+    )
+    print()
+    print("| program | changed | expected | named first | top effect removes | gap [mm/min] |")
+    print("|---|---|---|---|---|---|")
+    for r in results:
+        c = r["case"]
+        exp = c.variant.effect or "none"
+        mark = "" if r["named"] == exp else " (x)"
+        print(
+            f"| {c.name} | {c.variant.label} | {exp} | {r['named']}{mark} | "
+            f"{r['top']} {r['removed']:.0%} | {r['gap']:.1f} |"
+        )
+    changed = [r for r in results if r["case"].variant.effect is not None]
+    controls = [r for r in results if r["case"].variant.effect is None]
+    hits = sum(r["named"] == r["case"].variant.effect for r in changed)
+    alarms = sum(r["named"] != "none" for r in controls)
+    conf: dict[str, Counter] = defaultdict(Counter)
+    for r in results:
+        conf[r["case"].variant.effect or "none"][r["named"]] += 1
+    names = sorted({n for c in conf.values() for n in c})
+    print()
+    print("Confusion (rows: the changed setting's effect; columns: named first):")
+    print()
+    print("| expected | " + " | ".join(names) + " |")
+    print("|---|" + "---|" * len(names))
+    for exp in sorted(conf):
+        print(f"| {exp} | " + " | ".join(str(conf[exp][n] or "") for n in names) + " |")
+    errs = [
+        abs(r["predicted_s"] / r["measured_s"] - 1)
+        for r in controls
+        if math.isfinite(r["predicted_s"]) and r["measured_s"] > 0
+    ]
+    print()
+    print(f"changed setting named first: {hits}/{len(changed)} ({hits / max(len(changed), 1):.0%})")
+    print(f"false alarms on the unchanged machine: {alarms}/{len(controls)}")
+    if errs:
+        print(
+            f"cycle time of linuxcnc-sim on the unchanged runs: max error {max(errs):.1%}, "
+            f"mean {np.mean(errs):.1%}"
+        )
+    return 0
+
+
+if __name__ == "__main__":
+    raise SystemExit(main())
