@@ -306,8 +306,13 @@ def sign_flip_p(sq_a: NDArray[np.float64], sq_b: NDArray[np.float64]) -> float:
 
 
 def _moved(eff: Effect, params: Mapping[str, float], start: Mapping[str, float]) -> int:
-    """How many parameters a fit moved from where it started by more than 1 % of their range
-    (in log space for log parameters): the size of the explanation."""
+    """The size of the explanation: the effect's own count when it has one, else how many
+    parameters a fit moved from where it started by more than 1 % of their range (in log
+    space for log parameters); an effect without parameters is one switch (1)."""
+    if eff.size is not None:
+        return eff.size(params)
+    if not eff.params:
+        return 1
     k = 0
     for p in eff.params:
         v, s0 = params.get(p.name, 0.0), start.get(p.name, 0.0)

@@ -46,8 +46,8 @@ SIG_P = 0.01
 #: ... or, where the effect shows in too few places for that test (a few corners), it
 #: removes at least STRONG_K times the floor below: far more than noise could.
 STRONG_K = 3.0
-NOISE_K = 2.0
-MIN_FEED_SHARE = 0.002
+NOISE_K = 4.0
+MIN_FEED_SHARE = 0.004
 BEST_SHARE = 0.10
 #: Effects not worse than the best by more than the floor nor significantly (the same test
 #: gives p > TIE_P), or within TIE_SHARE of what the best removes, explain the data equally

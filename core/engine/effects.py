@@ -150,6 +150,8 @@ class Effect:
         Parameter groups fitted in turn (see the attribute).
     documented : tuple of (str, float, str)
         Documented values of parameters (see the attribute).
+    size : callable ({name: value}) -> int, optional
+        The parameters an explanation really uses (see the attribute).
     """
 
     name: str
@@ -164,6 +166,10 @@ class Effect:
     #: Values a controller's documentation gives: (parameter, value, where it is documented).
     #: ``ncperf calibrate`` writes the documented value when its fitted range includes it.
     documented: tuple[tuple[str, float, str], ...] = ()
+    #: How many parameters a fitted effect really uses (the size of the explanation the
+    #: decision rule compares), from its values; None: those moved from where the fit
+    #: started. For parameterisations with redundancy (a uniform scale and per-axis factors).
+    size: Callable[[Mapping[str, float]], int] | None = field(default=None, repr=False)
 
     def folded(self, machine: Machine) -> dict[str, float]:
         """The parameters the machine's ``[effects.NAME]`` table gives (defaults filled in),

@@ -31,6 +31,25 @@ def _apply(setup, p):
     )
 
 
+#: A scale within this share of 1 (log) is unchanged, and scales of the three axes within it
+#: of each other are one uniform scale (when counting an explanation's parameters).
+SAME = 0.02
+
+
+def _size(p):
+    """Parameters the explanation uses: a uniform change of acceleration or feed is one, a
+    change of some axes one per axis, a jerk scale one."""
+    n = 0
+    for kind in ("accel", "feed"):
+        e = np.log([p[f"{kind}_scale"] * p.get(f"{kind}_{a}", 1.0) for a in AXES])
+        changed = np.abs(e) > SAME
+        if changed.all() and e.max() - e.min() <= SAME:
+            n += 1
+        else:
+            n += int(changed.sum())
+    return n + int(abs(np.log(p["jerk_scale"])) > SAME)
+
+
 EFFECT = Effect(
     name="axis_dynamics",
     params=(
@@ -43,6 +62,7 @@ EFFECT = Effect(
     doc="per-axis acceleration, jerk and feed limits differ",
     relative=UNIFORM + PER_AXIS,
     stages=(UNIFORM, PER_AXIS),
+    size=_size,
 )
 
 

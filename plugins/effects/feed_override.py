@@ -26,6 +26,8 @@ EFFECT = Effect(
     apply=_apply,
     doc="constant scale on F",
     relative=("scale",),
+    # one explanation, the override; caps says how this controller applies it
+    size=lambda p: int(abs(p["scale"] - 1.0) > 0.01 * (1.5 - 0.5)),
 )
 
 
