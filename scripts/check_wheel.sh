@@ -50,6 +50,11 @@ run profile "$EX/fig3_semicircle_spiral.ngc" --machine linuxcnc-sim --csv "$WORK
 run compare "$EX/zlevel_cavity.ngc" "$EX/zlevel_cavity_chords.ngc" --svg "$WORK/c.svg"
 run diagnose "$EX/fig3_semicircle_spiral.ngc" "$WORK/trace.csv" --machine linuxcnc-sim \
     --effects feed_override,servo_lag --json "$WORK/d.json"
+run profile "$EX/fig1_polygons_F4000.ngc" --machine linuxcnc-sim --csv "$WORK/trace2.csv"
+run calibrate "$EX/fig3_semicircle_spiral.ngc" "$WORK/trace.csv" \
+    --also "$EX/fig1_polygons_F4000.ngc" "$WORK/trace2.csv" --machine linuxcnc-sim \
+    --effects block_cycle_time,corner_tolerance --out "$WORK/cal.toml"
+run analyze "$EX/fig1_polygons_F4000.ngc" --machine "$WORK/cal.toml"
 cat >"$WORK/part.apt" <<'EOF'
 PARTNO/WHEEL CHECK
 UNITS/MM
@@ -60,7 +65,7 @@ GOTO/20,20,0
 FINI
 EOF
 run analyze "$WORK/part.apt"
-for f in demo.svg a.json a.svg trace.csv c.svg d.json; do
+for f in demo.svg a.json a.svg trace.csv c.svg d.json cal.toml; do
     [ -s "$WORK/$f" ] || { echo "check_wheel: $f not written"; exit 1; }
 done
 # bad input: one line, exit 1, no traceback
