@@ -30,6 +30,18 @@ CONTROLLER_KEYS = {
     "path_feed_limit": ("max_feed", "max_path_feed", 60.0 / 1000.0),
 }
 Comments = dict[tuple[tuple[str, ...], str], str]
+#: The file's units, written beside every value of these keys (the start file's own comments
+#: do not survive reading it).
+UNITS = {
+    "max_feed": "m/min",
+    "max_acceleration": "m/s^2",
+    "max_jerk": "m/s^3",
+    "interpolation_time": "s",
+    "path_tolerance": "mm",
+    "curvature_transition_time": "s",
+    "max_path_feed": "m/min",
+    "peck_clearance": "mm",
+}
 
 
 def _value(v: Any) -> str:
@@ -66,6 +78,9 @@ def _emit(table: Mapping[str, Any], path: tuple[str, ...], comments: Comments, o
     for k, v in scalars.items():
         line = f"{_key(k)} = {_value(v)}"
         note = comments.get((path, k))
+        unit = UNITS.get(k) if path and path[0] in ("axes", "controller") else None
+        if unit:
+            note = f"{unit}; {note}" if note else unit
         out.append(f"{line:<32s} # {note}" if note else line)
     for k, v in tables.items():
         _emit(v, (*path, k), comments, out)
