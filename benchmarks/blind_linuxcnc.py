@@ -38,6 +38,7 @@ from pathlib import Path
 
 import numpy as np
 from blind.families import FAMILIES, program  # benchmarks/ is the script's folder
+from linuxcnc_withheld import post_process
 
 ROOT = Path(__file__).resolve().parents[1]
 SHARED = ROOT.parent / "shared"
@@ -226,7 +227,9 @@ def record(case: Case, cache: Path) -> Path:
         plain = record(Case(CONTROL, case.family, case.seed), cache)
         out = cache / f"{case.name}.{v.key}.csv"
         if not out.exists():
-            post_process(plain, out, *v.post)
+            effect, seconds = v.post
+            key = "tau" if effect == "servo_lag" else "window"
+            post_process(plain, out, effect, {key: seconds})
         return out
     out = cache / f"{case.name}.{v.key}.csv"
     if out.exists():
@@ -242,50 +245,6 @@ def record(case: Case, cache: Path) -> Path:
         raise SystemExit(f"{prog}: the LinuxCNC harness failed:\n{r.stderr[-2000:]}")
     Path(str(out) + ".part").rename(out)
     return out
-
-
-def post_process(src: Path, out: Path, effect: str, seconds: float) -> None:
-    """A trace of the unchanged machine with an effect LinuxCNC does not have: positions
-    behind a first-order lag per axis (actual positions; v stays the planner's), or
-    positions and v smoothed by a causal moving average (a setpoint filter)."""
-    with open(src) as fh:
-        names = fh.readline().strip().split(",")
-    data = np.loadtxt(src, delimiter=",", skiprows=1)
-    col = {n: k for k, n in enumerate(names)}
-    dt = float(np.median(np.diff(data[:, col["t"]])))
-    pos = data[:, [col["x"], col["y"], col["z"]]]
-    v = data[:, col["v"]]
-    if effect == "servo_lag":
-        rest = int(8 * seconds / dt)
-        pos = np.concatenate([pos, np.repeat(pos[-1:], rest, axis=0)])
-        a = math.exp(-dt / seconds)
-        out_pos = pos.copy()
-        for i in range(1, pos.shape[0]):
-            out_pos[i] = a * out_pos[i - 1] + (1 - a) * pos[i]
-        v = np.concatenate([v, np.zeros(rest)])
-    else:
-        k = max(int(round(seconds / dt)), 1)
-        pos = np.concatenate([pos, np.repeat(pos[-1:], k, axis=0)])
-        v = np.concatenate([v, np.zeros(k)])
-        kernel = np.ones(k) / k
-        pad = np.concatenate([np.repeat(pos[:1], k - 1, axis=0), pos])
-        out_pos = np.column_stack([np.convolve(pad[:, j], kernel, "valid") for j in range(3)])
-        v = np.convolve(np.concatenate([np.zeros(k - 1), v]), kernel, "valid")
-    m = out_pos.shape[0]
-    line = data[:, col["line"]]
-    line = np.concatenate([line, np.full(m - line.size, line[-1])])
-    t = data[0, col["t"]] + np.arange(m) * dt
-    table = np.column_stack([t, out_pos, v, line])
-    tmp = Path(str(out) + ".part")
-    np.savetxt(
-        tmp,
-        table,
-        delimiter=",",
-        header="t,x,y,z,v,line",
-        comments="",
-        fmt=["%.4f", "%.6f", "%.6f", "%.6f", "%.6f", "%d"],
-    )
-    tmp.rename(out)
 
 
 def diagnose_case(args: tuple[Case, str]) -> dict:

@@ -188,7 +188,7 @@ def post_process(src: Path, out: Path, effect: str, params: dict[str, float]) ->
             out_pos[i] = a * out_pos[i - 1] + (1 - a) * pos[i]
         v = np.concatenate([v, np.zeros(rest)])
     else:
-        k = int(round(params["window"] / dt))
+        k = max(int(round(params["window"] / dt)), 1)
         pos = np.concatenate([pos, np.repeat(pos[-1:], k, axis=0)])
         v = np.concatenate([v, np.zeros(k)])
         kernel = np.ones(k) / k

@@ -54,7 +54,8 @@ def _value(v: Any) -> str:
             return "inf" if v > 0 else "-inf"
         if math.isnan(v):
             return "nan"
-        return f"{v:.6g}" if ("e" in f"{v:.6g}" or "." in f"{v:.6g}") else f"{v:.6g}.0"
+        text = f"{v:.6g}"
+        return text if "e" in text or "." in text else text + ".0"  # a TOML float
     if isinstance(v, str):
         return json.dumps(v, ensure_ascii=True)
     if isinstance(v, list):

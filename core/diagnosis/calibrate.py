@@ -10,8 +10,8 @@ fitted on several programs or runs and checked on others.
    alternate stretches of the one run (:func:`folds`).
 2. Forward selection on fold A: every controller effect is fitted on A's calibration part
    on top of what is already chosen, and the one that removes most of the held-out gap is
-   added while it clears the diagnosis's test (:func:`core.diagnosis.diagnose.clears`, with
-   CAL_ADD_SHARE of what is left) -- so an effect the data cannot see stays out.
+   added while it clears the diagnosis's test (:func:`core.diagnosis.diagnose.add_effects`,
+   with CAL_ADD_SHARE of what is left) -- so an effect the data cannot see stays out.
 3. The chosen effects are refitted, in the same order, with the folds swapped (fold B): two
    values of every parameter, each fitted on data the other was measured on.
 4. The value written is their mean (geometric for scales), and its range is what the two
@@ -31,10 +31,9 @@ from dataclasses import dataclass
 import numpy as np
 
 from core.diagnosis.align import Alignment
-from core.diagnosis.diagnose import noise_floor, sign_flip_p
+from core.diagnosis.diagnose import add_effects, noise_floor
 from core.diagnosis.fit import fit, predict_all
-from core.diagnosis.resample import Data, gap, held_out_chunks, pieces, resample, split
-from core.diagnosis.rules import SIG_P, STRONG_K
+from core.diagnosis.resample import Data, gap, pieces, resample, split
 from core.engine.effects import Effect, Setup
 from core.engine.indicators import IndicatorSource
 from core.engine.predict import Prediction
@@ -129,8 +128,10 @@ def folds(data: Sequence[Data]) -> tuple[list[Data], list[Data], str]:
     docstring."""
     programs = sorted({d.case for d in data})
     if len(programs) >= 2:
-        a = [dataclasses.replace(d, calibration=np.full(d.s.size, d.case % 2 == 0)) for d in data]
-        a = [dataclasses.replace(d, chunk=pieces(d)) for d in a]
+        a = [
+            dataclasses.replace(d, calibration=np.full(d.s.size, d.case % 2 == 0), chunk=pieces(d))
+            for d in data
+        ]
         how = (
             f"other programs: {len(programs)} programs, every other one fitted and the others "
             "measured, then the other way round"
@@ -142,53 +143,19 @@ def folds(data: Sequence[Data]) -> tuple[list[Data], list[Data], str]:
     return a, b, how
 
 
-def _select(
-    indicators_of: IndicatorSource,
-    tps: Sequence[ToolPath],
-    base: Setup,
-    effects: Mapping[str, Effect],
-    data: Sequence[Data],
-    floor: float,
-) -> list[tuple[str, dict[str, float], float, float]]:
-    """Forward selection on one fold: (effect, params, gap before, gap after) in order."""
-    current = base
-    preds = predict_all(indicators_of, tps, current)
-    g_now = gap(preds, data, "held_out")
-    sq_now = held_out_chunks(preds, data)[0]
-    chosen: list[tuple[str, dict[str, float], float, float]] = []
-    while len(chosen) < CAL_MAX:
-        trials = []
-        for name, eff in effects.items():
-            if any(c[0] == name for c in chosen):
-                continue
-            params, p = fit(indicators_of, tps, current, eff, data)
-            trials.append((gap(p, data, "held_out"), name, params, p))
-        if not trials:
-            break
-        g_new, name, params, p = min(trials, key=lambda x: x[0])
-        sq_new = held_out_chunks(p, data)[0]
-        gain = g_now - g_new
-        significant = sign_flip_p(sq_now, sq_new) <= SIG_P or gain >= STRONG_K * floor
-        if g_now <= 0 or gain / g_now < CAL_ADD_SHARE or gain < floor or not significant:
-            break
-        chosen.append((name, params, g_now, g_new))
-        current = effects[name].apply(current, params)
-        g_now, sq_now = g_new, sq_new
-    return chosen
-
-
 def _refit(
     indicators_of: IndicatorSource,
     tps: Sequence[ToolPath],
     base: Setup,
+    preds: list[Prediction],
     effects: Mapping[str, Effect],
     names: Sequence[str],
     data: Sequence[Data],
 ) -> tuple[list[dict[str, float]], list[Prediction]]:
-    """The named effects fitted in order on one fold; the params and the last predictions."""
+    """The named effects fitted in order on one fold on top of ``base`` (whose predictions
+    are ``preds``); the params and the last predictions."""
     current = base
     out = []
-    preds = predict_all(indicators_of, tps, current)
     for name in names:
         params, preds = fit(indicators_of, tps, current, effects[name], data)
         out.append(params)
@@ -226,15 +193,13 @@ def calibrate(
         raise UsageError("no measured feed moves to calibrate on")
     fold_a, fold_b, how = folds(data)
     floor, _ = noise_floor(base, fold_a)
-    chosen = _select(indicators_of, tps, base, effects, fold_a, floor)
-    names = [c[0] for c in chosen]
-    params_b, preds_b = _refit(indicators_of, tps, base, effects, names, fold_b)
     before = predict_all(indicators_of, tps, base)
+    chosen, _, preds_a = add_effects(
+        indicators_of, tps, base, before, effects, fold_a, floor, share=CAL_ADD_SHARE, most=CAL_MAX
+    )
+    names = [c[0] for c in chosen]
+    params_b, preds_b = _refit(indicators_of, tps, base, before, effects, names, fold_b)
     gaps_before = (gap(before, fold_a, "held_out"), gap(before, fold_b, "held_out"))
-    current = base
-    for name, params, _, _ in chosen:
-        current = effects[name].apply(current, params)
-    preds_a = predict_all(indicators_of, tps, current)
     gaps_after = (gap(preds_a, fold_a, "held_out"), gap(preds_b, fold_b, "held_out"))
 
     # The written values, their ranges, documented values inside them.

@@ -231,36 +231,27 @@ def diagnose_cases(
 
     chosen: list[str] = []
     chosen_params: dict[str, dict[str, float]] = {}
-    current, current_preds = base, before
+    current_preds = before
     if best is not None:
         chosen.append(best)
         chosen_params[best] = fitted[best][0]
         current = effects[best].apply(base, fitted[best][0])
-        current_preds = fitted[best][1]
-        g_now = gap(current_preds, data, "held_out")
-        sq_now = held_out_chunks(current_preds, data)[0]
-        while len(chosen) < MAX_CHOSEN and g_now >= STOP_SHARE * g_before:
-            trials = []
-            for r in results:
-                if r.name in chosen:
-                    continue
-                params, preds = fit(indicators_of, tps, current, effects[r.name], data)
-                trials.append((gap(preds, data, "held_out"), r.name, params, preds))
-            if not trials:
-                break
-            g_new, name, params, preds = min(trials, key=lambda x: x[0])
-            sq_new = held_out_chunks(preds, data)[0]
-            if (
-                g_now <= 0
-                or (g_now - g_new) / g_now < ADD_SHARE
-                or g_now - g_new < floor
-                or (sign_flip_p(sq_now, sq_new) > SIG_P and g_now - g_new < STRONG_K * floor)
-            ):
-                break
+        others = {r.name: effects[r.name] for r in results if r.name != best}
+        added, _, current_preds = add_effects(
+            indicators_of,
+            tps,
+            current,
+            fitted[best][1],
+            others,
+            data,
+            floor,
+            share=ADD_SHARE,
+            most=MAX_CHOSEN - 1,
+            stop=STOP_SHARE * g_before,
+        )
+        for name, params, _, _ in added:
             chosen.append(name)
             chosen_params[name] = params
-            current = effects[name].apply(current, params)
-            current_preds, g_now, sq_now = preds, g_new, sq_new
     return Diagnosis(
         baseline=baseline,
         held_out=held_out,
@@ -280,6 +271,60 @@ def diagnose_cases(
         floor_source=floor_source,
         reason=reason,
     )
+
+
+def clears(g_before: float, g_after: float, p: float, floor: float, share: float) -> bool:
+    """The test an effect must pass to be named or added (mm/min RMS held-out gaps before and
+    after it, and the p value of the reduction): it removes at least ``share`` of the gap,
+    at least the floor, and significantly -- p <= SIG_P, or STRONG_K times the floor where
+    it shows in too few places for the test."""
+    gain = g_before - g_after
+    return (
+        g_before > 0
+        and gain / g_before >= share
+        and gain >= floor
+        and (p <= SIG_P or gain >= STRONG_K * floor)
+    )
+
+
+def add_effects(
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    current: Setup,
+    preds: list[Prediction],
+    effects: Mapping[str, Effect],
+    data: Sequence[Data],
+    floor: float,
+    *,
+    share: float,
+    most: int,
+    stop: float = 0.0,
+) -> tuple[list[tuple[str, dict[str, float], float, float]], Setup, list[Prediction]]:
+    """Forward selection on top of ``current`` (whose predictions are ``preds``): every
+    effect not yet added is fitted on the calibration data, and the one leaving the least
+    held-out gap is added while it :func:`clears` the test (``share`` of what is left), at
+    most ``most`` of them and while the gap is at least ``stop`` (mm/min). Returns (effect,
+    params, gap before, gap after) in the order added, the setup and its predictions."""
+    g_now = gap(preds, data, "held_out")
+    sq_now = held_out_chunks(preds, data)[0]
+    added: list[tuple[str, dict[str, float], float, float]] = []
+    while len(added) < most and g_now >= stop:
+        trials = []
+        for name, eff in effects.items():
+            if any(a[0] == name for a in added):
+                continue
+            params, p = fit(indicators_of, tps, current, eff, data)
+            trials.append((gap(p, data, "held_out"), name, params, p))
+        if not trials:
+            break
+        g_new, name, params, p = min(trials, key=lambda x: x[0])
+        sq_new = held_out_chunks(p, data)[0]
+        if not clears(g_now, g_new, sign_flip_p(sq_now, sq_new), floor, share):
+            break
+        added.append((name, params, g_now, g_new))
+        current = effects[name].apply(current, params)
+        preds, g_now, sq_now = p, g_new, sq_new
+    return added, current, preds
 
 
 def sign_flip_p(sq_a: NDArray[np.float64], sq_b: NDArray[np.float64]) -> float:
@@ -313,15 +358,7 @@ def _moved(eff: Effect, params: Mapping[str, float], start: Mapping[str, float])
         return eff.size(params)
     if not eff.params:
         return 1
-    k = 0
-    for p in eff.params:
-        v, s0 = params.get(p.name, 0.0), start.get(p.name, 0.0)
-        if p.log and v > 0 and s0 > 0 and p.low > 0:
-            far = abs(math.log(v / s0)) > 0.01 * math.log(p.high / p.low)
-        else:
-            far = abs(v - s0) > 0.01 * (p.high - p.low)
-        k += far
-    return k
+    return sum(p.differs(params.get(p.name, 0.0), start.get(p.name, 0.0)) for p in eff.params)
 
 
 def noise_floor(base: Setup, data: Sequence[Data]) -> tuple[float, str]:
@@ -350,14 +387,11 @@ def decide(
     if not ranked:
         return ranked, None, "no effects to try"
 
-    def clears(r: EffectResult) -> bool:
-        return (
-            (r.p <= SIG_P or r.held_out_gap_before - r.held_out_gap_after >= STRONG_K * floor)
-            and r.removed >= BEST_SHARE
-            and r.held_out_gap_before - r.held_out_gap_after >= floor
-        )
-
-    ok = [r for r in ranked if clears(r)]
+    ok = [
+        r
+        for r in ranked
+        if clears(r.held_out_gap_before, r.held_out_gap_after, r.p, floor, BEST_SHARE)
+    ]
     if not ok:
         lead = ranked[0]
         why = []

@@ -23,6 +23,7 @@ The prediction built from a Setup (:func:`core.engine.predict.predict`):
 from __future__ import annotations
 
 import dataclasses
+import math
 from collections.abc import Callable, Mapping
 from dataclasses import dataclass, field
 from typing import Any
@@ -34,6 +35,10 @@ from core.model import geometry as g
 from core.model.errors import MachineError, UsageError
 from core.model.machine import Machine
 from core.model.toolpath import MoveKind, ToolPath
+
+#: A fitted parameter counts as moved (part of the explanation) beyond this share of its
+#: range (:meth:`Param.differs`).
+MOVED_SHARE = 0.01
 
 
 @dataclass(frozen=True)
@@ -65,6 +70,13 @@ class Param:
     def default_for(self, machine: Machine) -> float:
         d = self.default
         return float(d(machine)) if callable(d) else float(d)
+
+    def differs(self, value: float, start: float) -> bool:
+        """Whether a fit moved the parameter from ``start``: by more than MOVED_SHARE of its
+        range (in log space for log parameters)."""
+        if self.log and value > 0 and start > 0 and self.low > 0:
+            return abs(math.log(value / start)) > MOVED_SHARE * math.log(self.high / self.low)
+        return abs(value - start) > MOVED_SHARE * (self.high - self.low)
 
 
 @dataclass(frozen=True)

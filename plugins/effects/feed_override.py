@@ -20,14 +20,16 @@ def _apply(setup, p):
     return setup.replace(feed_scale=setup.feed_scale * scale, cap_scale=setup.cap_scale * caps)
 
 
+SCALE = Param("scale", 0.5, 1.5, 1.0)
+
 EFFECT = Effect(
     name="feed_override",
-    params=(Param("scale", 0.5, 1.5, 1.0), Param("caps", 0.0, 1.0, 0.0)),
+    params=(SCALE, Param("caps", 0.0, 1.0, 0.0)),
     apply=_apply,
     doc="constant scale on F",
     relative=("scale",),
     # one explanation, the override; caps says how this controller applies it
-    size=lambda p: int(abs(p["scale"] - 1.0) > 0.01 * (1.5 - 0.5)),
+    size=lambda p: int(SCALE.differs(p["scale"], 1.0)),
 )
 
 
