@@ -55,13 +55,21 @@ _LINUXCNC_TEXT = re.compile(
 _FANUC_TEXT = re.compile(rb"(?im)\bM98\b|\bM99\b|\bG65\b|\bWHILE\s*\[|\bIF\s*\[|\bGOTO\s*\d")
 
 
-def detect_dialect_text(path: str, data: bytes) -> str:
-    """Dialect from the extension, else from the constructs in the text, else Fanuc/ISO."""
+def _dialect_of_extension(path: str) -> str | None:
+    """LinuxCNC for .ngc, Siemens for .mpf/.spf, else None (the content decides)."""
     ext = Path(path).suffix.lower()
     if ext == ".ngc":
         return "linuxcnc"
     if ext in (".mpf", ".spf"):
         return "siemens"
+    return None
+
+
+def detect_dialect_text(path: str, data: bytes) -> str:
+    """Dialect from the extension, else from the constructs in the text, else Fanuc/ISO."""
+    by_ext = _dialect_of_extension(path)
+    if by_ext:
+        return by_ext
     if _SIEMENS_TEXT.search(data):
         return "siemens"
     if _LINUXCNC_TEXT.search(data) and not _FANUC_TEXT.search(data):
@@ -71,11 +79,9 @@ def detect_dialect_text(path: str, data: bytes) -> str:
 
 def detect_dialect(path: str, words: Words) -> str:
     """Dialect from the extension, else from what the program uses."""
-    ext = Path(path).suffix.lower()
-    if ext == ".ngc":
-        return "linuxcnc"
-    if ext in (".mpf", ".spf"):
-        return "siemens"
+    by_ext = _dialect_of_extension(path)
+    if by_ext:
+        return by_ext
     if words.keywords:
         return "siemens"
     g_codes = np.unique(np.rint(words.value[words.letter == ord("G")] * 10).astype(np.int64))
