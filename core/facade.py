@@ -18,6 +18,7 @@ from core.engine.predict import Prediction, predict
 from core.engine.profile import build_profile
 from core.engine.rotary import missing_axes
 from core.model.errors import Notice, UsageError
+from core.model.limits import check_toolpath
 from core.model.machine import Machine
 from core.model.toolpath import ExtractOptions, ToolPath
 from core.model.trace import Trace, TraceOptions
@@ -48,6 +49,7 @@ class Ncperf:
             )
         if not isinstance(tp, ToolPath):
             raise TypeError(f"ncperf_extract returned {type(tp).__name__}, not ToolPath")
+        check_toolpath(tp)  # whatever the adapter, nothing out of range reaches the models
         return tp
 
     # A2

@@ -100,7 +100,7 @@ def test_bad_files_name_file_line_and_key(tmp_path, change, line, message):
 
 def test_missing_file(tmp_path):
     """A machine file that does not exist: an error naming it."""
-    with pytest.raises(MachineError, match="cannot read machine file"):
+    with pytest.raises(MachineError, match="nope.toml: cannot read: No such file"):
         load_machine_file(tmp_path / "nope.toml")
 
 

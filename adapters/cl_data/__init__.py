@@ -23,6 +23,7 @@ from adapters.cl_data.interp import interpret
 from adapters.cl_data.source import scan_gotos
 from adapters.source import GCODE_EXTENSIONS, Source, check_bytes  # G-code: never claimed
 from core import InputError, ToolPath, hookimpl
+from core.model.inputs import read_input
 
 #: Extensions CAM systems give CL data (NX .cls/.clsf, Creo .ncl, SolidWorks CAM .apt...).
 EXTENSIONS = frozenset({".cls", ".clsf", ".apt", ".cl", ".aptsource", ".cldata", ".ncl"})
@@ -79,19 +80,13 @@ def ncperf_extract(source: object) -> ToolPath | None:
         return None
     try:
         if suffix not in EXTENSIONS:
-            with open(path, "rb") as fh:
-                head = fh.read(4096)
-            if not looks_like_cl(head):
+            if not looks_like_cl(read_input(path, limit=4096, what="CL data")):
                 return None
-        data = path.read_bytes()
-    except IsADirectoryError:
+        data = read_input(path, what="CL data")
+    except InputError:
         if suffix in EXTENSIONS:
-            raise InputError("is a folder, not CL data", source=str(path)) from None
-        return None
-    except OSError as exc:
-        if suffix in EXTENSIONS:
-            raise InputError(f"cannot read: {exc.strerror}", source=str(path)) from None
-        return None
+            raise
+        return None  # not ours to judge: another adapter, or "no adapter reads it"
     return read_cl(data, str(path))
 
 

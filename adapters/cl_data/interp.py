@@ -54,6 +54,7 @@ from adapters.cl_data.records import Record, leading_numbers, number, numbers, r
 from adapters.cl_data.source import FastGotos, Source
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
+from core.model.limits import MAX_TOOL
 from core.model.tolerances import TOL
 from core.model.toolpath import (
     POINTS_DROPPED,
@@ -511,8 +512,8 @@ class Reader:
 
     def _tool_number(self, rec: Record, token: str) -> None:
         t = number(self.src, rec, token, f"{rec.word} tool number")
-        if t < 0 or t != int(t):
-            raise self._error(rec, f"tool number must be a whole number, got {t:g}")
+        if not (0 <= t <= MAX_TOOL and t == int(t)):
+            raise self._error(rec, f"tool number must be a whole number 0 to {MAX_TOOL}, got {t:g}")
         self.tool = int(t)
         if not self.tool_paths:
             self.boundaries.append((self.n, None))

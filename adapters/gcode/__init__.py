@@ -29,6 +29,7 @@ from adapters.gcode.setup import machine_setup
 from adapters.gcode.words import DIALECTS
 from adapters.source import GCODE_EXTENSIONS
 from core import ExtractOptions, InputError, ToolPath, UsageError, hookimpl
+from core.model.inputs import read_input
 
 #: Extensions CAM posts use for G-code (shared with the CL reader, which never claims them).
 EXTENSIONS = GCODE_EXTENSIONS
@@ -114,17 +115,11 @@ def ncperf_extract(source: object, options: ExtractOptions) -> ToolPath | None:
     if path is None:
         return None
     suffix = path.suffix.lower()
-    try:
-        if suffix not in EXTENSIONS:
-            with open(path, "rb") as fh:
-                head = fh.read(4096)
-            if not (_LOOKS_LIKE_GCODE.search(head) or _HEIDENHAIN.search(head)):
-                return None
-        data = path.read_bytes()
-    except IsADirectoryError:
-        raise InputError("is a folder, not a program", source=str(path)) from None
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror}", source=str(path)) from None
+    if suffix not in EXTENSIONS:
+        head = read_input(path, limit=4096, what="a program")
+        if not (_LOOKS_LIKE_GCODE.search(head) or _HEIDENHAIN.search(head)):
+            return None
+    data = read_input(path, what="a program")
     return read_gcode(
         data,
         str(path),

@@ -29,6 +29,7 @@ from adapters.gcode import words as W
 from adapters.gcode.comp import Compensator
 from adapters.gcode.interp import State
 from core.model.errors import Notes
+from core.model.limits import MAX_TOOL
 from core.model.tolerances import TOL
 from core.model.toolpath import PathMode
 
@@ -644,7 +645,10 @@ class Controller:
                 self.feed = f * self._feed_scale() / 60.0
         # tool
         if "T" in words:
-            self.tool_selected = int(words["T"])
+            t = words["T"]
+            if not (0 <= t <= MAX_TOOL and t == int(t)):
+                raise ControlError(f"tool number must be a whole number 0 to {MAX_TOOL}")
+            self.tool_selected = int(t)
         if "S" in words and d != "siemens" or ("S" in words and 40 not in g):
             self.spindle_speed = abs(words["S"])
         if "tool" in extra:

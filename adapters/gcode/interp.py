@@ -20,6 +20,7 @@ from adapters.gcode import words as W
 from adapters.gcode.lexer import Source, Words
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
+from core.model.limits import MAX_TOOL
 from core.model.tolerances import TOL
 from core.model.toolpath import (
     POINTS_DROPPED,
@@ -577,6 +578,10 @@ class Interpreter:
         n = mi.size
         # Tools and operations.
         tvals, tpres = self.vals["T"], self.pres["T"]
+        bad_t = tpres & ~((tvals >= 0) & (tvals <= MAX_TOOL) & (tvals == np.floor(tvals)))
+        if bad_t.any():
+            k = int(np.flatnonzero(bad_t)[0])
+            raise self.error(self.al[k], f"tool number must be a whole number 0 to {MAX_TOOL}")
         t_sel = _ffill(tvals, tpres, -1)
         if self.m_tool.any():
             tool_line = _ffill(t_sel, self.m_tool, -1)

@@ -33,6 +33,7 @@ from adapters.gcode.plain import MIN_RUN, PlainRuns
 from adapters.source import Source, check_bytes
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
+from core.model.inputs import read_input
 from core.model.tolerances import TOL
 from core.model.toolpath import (
     POINTS_DROPPED,
@@ -701,7 +702,7 @@ class Runner:
                 for cand in (name, name.lower(), name.upper()):
                     p = folder / f"{cand}{ext}"
                     if p.is_file():
-                        return self._unit(str(p), p.read_bytes())
+                        return self._unit(str(p), read_input(p, what="a subprogram"))
         where = ", ".join(str(f) for f in self.search)
         raise ControlError(f"subprogram {name} not found (looked for {name}.* in {where})")
 

@@ -14,10 +14,10 @@ takes them as mm (the ``--machine`` file's units).
 from __future__ import annotations
 
 import re
-from pathlib import Path
 
 from adapters.gcode.control import MachineSetup
 from core.model.errors import InputError
+from core.model.inputs import read_input
 from core.model.setup import ControllerSetup
 
 _WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
@@ -38,10 +38,7 @@ def offset_code(name: str) -> int:
 
 def read_tool_table(path: str) -> dict[int, tuple[float | None, float | None]]:
     """tool -> (radius, length) from a LinuxCNC tool table; errors name file and line."""
-    try:
-        text = Path(path).read_text(encoding="utf-8", errors="replace")
-    except OSError as exc:
-        raise InputError(f"cannot read tool table: {exc.strerror}", source=path) from None
+    text = read_input(path, what="a tool table").decode("utf-8", "replace")
     tools: dict[int, tuple[float | None, float | None]] = {}
     for k, raw in enumerate(text.splitlines(), start=1):
         code = raw.split(";", 1)[0].strip()

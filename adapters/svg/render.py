@@ -32,7 +32,7 @@ from __future__ import annotations
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
-from xml.sax.saxutils import escape
+from xml.sax.saxutils import escape as _xml_escape
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -41,6 +41,7 @@ from core.cli.output import atomic_writer
 from core.diagnosis.diagnose import Diagnosis
 from core.diagnosis.rules import BEST_SHARE
 from core.model import geometry as g
+from core.model.text import printable
 from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, ToolPath
 from core.view.annotations import Annotations
@@ -114,6 +115,12 @@ VIEW_NAMES = {"xy": "top (XY)", "xz": "front (XZ)", "yz": "side (YZ)", "iso": "i
 
 LEFT_TITLE = "Predicted feed reduction (models 1-3)"
 RIGHT_TITLE = "Block length vs L = F t_int (model 3)"
+
+
+def escape(text: str, entities: dict[str, str] | None = None) -> str:
+    """Text for an SVG element or attribute: control characters and bytes that are not UTF-8
+    shown as escapes (they would make the file ill-formed XML or unwritable), then XML-escaped."""
+    return _xml_escape(printable(text), entities or {})
 
 
 def project(points: ArrayLike, view: str) -> NDArray[np.float64]:

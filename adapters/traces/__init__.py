@@ -23,6 +23,8 @@ from pathlib import Path
 import numpy as np
 
 from core import InputError, Notice, hookimpl
+from core.model.inputs import read_input, read_input_text
+from core.model.limits import FEED_RANGE, MAX_COORD
 from core.model.trace import Trace, TraceOptions
 
 INCH = 25.4
@@ -31,6 +33,17 @@ GAP_PERIODS = 20
 
 _SHDR = re.compile(r"^\s*\d{4}-\d\d-\d\dT[0-9:.]+Z?\|[^|]*\|")
 _POS_KEYS = (("Xact", "Yact", "Zact"), ("Xabs", "Yabs", "Zabs"), ("Xpos", "Ypos", "Zpos"))
+_CHANNEL = {"Feed_Rate": "v", "Block_Number": "line"}
+#: Largest magnitude of each recorded value (s, mm or inch, units/s, line number): beyond
+#: these a number is a corrupt record, and squaring it later would overflow.
+TRACE_RANGE = {
+    "t": 1e9,
+    "x": MAX_COORD,
+    "y": MAX_COORD,
+    "z": MAX_COORD,
+    "v": FEED_RANGE[1],
+    "line": 2.0**53,
+}
 
 
 def _path(source: object) -> Path | None:
@@ -77,14 +90,7 @@ def _time_checks(t: np.ndarray, name: str, first_line: int) -> list[Notice]:
 def read_csv_trace(path: Path, options: TraceOptions) -> Trace:
     """A CSV trace with a header (see the module docstring)."""
     name = str(path)
-    try:
-        with open(path, encoding="utf-8", errors="strict") as fh:
-            header = fh.readline()
-            body = fh.read()
-    except UnicodeDecodeError:
-        raise InputError("not a text file", source=name) from None
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror}", source=name) from None
+    header, _, body = read_input_text(path, what="a trace").partition("\n")
     cols = [c.strip().lower() for c in header.strip().split(",")]
     if not header.strip():
         raise InputError("empty trace file", source=name)
@@ -107,6 +113,16 @@ def read_csv_trace(path: Path, options: TraceOptions) -> Trace:
     idx = [cols.index(c) for c in want]
     data = _parse_rows(lines, idx, len(cols), name)
     col = {c: data[:, k] for k, c in enumerate(want)}
+    for c, values in col.items():
+        bad = np.flatnonzero(np.abs(values) > TRACE_RANGE[c])
+        if bad.size:
+            k = int(bad[0])
+            raise InputError(
+                f"{c} beyond {TRACE_RANGE[c]:g}: not a value a machine records",
+                source=name,
+                line=k + 2,
+                text=lines[k],
+            )
     scale, units = _scale(options, name)
     notes = _time_checks(col["t"], name, 2)
     t = col["t"]
@@ -169,7 +185,9 @@ def _parse_rows(lines: list[str], idx: list[int], ncols: int, name: str) -> np.n
 def _seconds(stamp: str) -> float:
     """Seconds since the epoch of an ISO timestamp with any number of fraction digits."""
     stamp = stamp.strip().rstrip("Z")
-    main, _, frac = stamp.partition(".")
+    main, dot, frac = stamp.partition(".")
+    if dot and not (frac.isascii() and frac.isdigit()):
+        raise ValueError(f"fraction of a second '{frac}' is not digits")
     base = datetime.strptime(main, "%Y-%m-%dT%H:%M:%S").replace(tzinfo=UTC)
     return base.timestamp() + (float("0." + frac) if frac else 0.0)
 
@@ -177,12 +195,7 @@ def _seconds(stamp: str) -> float:
 def read_shdr_trace(path: Path, options: TraceOptions) -> Trace:
     """An MTConnect SHDR recording (see the module docstring)."""
     name = str(path)
-    try:
-        text = path.read_text(encoding="utf-8")
-    except UnicodeDecodeError:
-        raise InputError("not a text file", source=name) from None
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror}", source=name) from None
+    text = read_input_text(path, what="a trace")
     scale, units = _scale(options, name)
     events: dict[str, list[tuple[float, str, int]]] = {}
     first = None
@@ -222,6 +235,13 @@ def read_shdr_trace(path: Path, options: TraceOptions) -> Trace:
                     ) from None
                 if not np.isfinite(v):
                     raise InputError(f"{key} is {value}", source=name, line=k)
+                limit = TRACE_RANGE[_CHANNEL.get(key, "x")]
+                if abs(v) > limit:
+                    raise InputError(
+                        f"{key} beyond {limit:g}: not a value a machine records",
+                        source=name,
+                        line=k,
+                    )
             ts.append(t)
             vs.append(v)
         return np.array(ts), np.array(vs)
@@ -250,6 +270,12 @@ def read_shdr_trace(path: Path, options: TraceOptions) -> Trace:
             Notice(name, None, "UNAVAILABLE values: those stretches are left out", int((~ok).sum()))
         )
     times = times[ok]
+    if times.size < 2:
+        raise InputError(
+            f"{times.size} sample(s) where every recorded channel has a value "
+            "(the rest UNAVAILABLE): nothing to diagnose",
+            source=name,
+        )
     # Event data: a long silence means nothing changed, not a gap in the recording.
     pos = None
     if pos_keys:
@@ -275,11 +301,7 @@ def ncperf_read_trace(source: object, options: TraceOptions) -> Trace | None:
         return None
     if path.suffix.lower() == ".csv":
         return read_csv_trace(path, options)
-    try:
-        with open(path, "rb") as fh:
-            head = fh.read(512).decode("utf-8", "replace")
-    except OSError as exc:
-        raise InputError(f"cannot read: {exc.strerror}", source=str(path)) from None
+    head = read_input(path, limit=512, what="a trace").decode("utf-8", "replace")
     first = next((ln for ln in head.splitlines() if ln.strip()), "")
     if _SHDR.match(first):
         return read_shdr_trace(path, options)

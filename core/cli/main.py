@@ -8,17 +8,19 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import io
 import math
 import os
 import sys
 from importlib import resources
 from pathlib import Path
+from typing import Any
 
 from core._version import __version__
 from core.cli.compare import ranked
 from core.cli.compare import row as compare_row
 from core.cli.compare import table as compare_table
-from core.cli.output import atomic_writer
+from core.cli.output import atomic_writer, check_outputs, transaction
 from core.cli.report import fmt_time, summary, write_json, write_samples
 from core.engine.profile import SAMPLE_DT
 from core.facade import Ncperf
@@ -30,12 +32,20 @@ from core.model.machine import (
     preset_names,
     resolve_machine,
 )
+from core.model.text import printable
 from core.model.toolpath import ExtractOptions
 from core.view.targets import VIEWS, ComparisonTarget, FileTarget
 
 DEMO_PROGRAM = "zlevel_cavity.ngc"
 DEMO_SVG = "ncperf-demo.svg"
 MAX_NOTICES = 10
+#: ``profile --dt`` range, s: 1 us (a thousand times finer than a servo cycle) to 1 min.
+MIN_DT = 1e-6
+MAX_DT = 60.0
+#: Most rows ``profile`` writes: 100 million (28 hours at 1 ms, about 6 GB of CSV); the
+#: samples are computed and written in pieces of SAMPLE_PIECE, so memory stays bounded.
+MAX_SAMPLES = 100_000_000
+SAMPLE_PIECE = 262_144
 
 
 def demo_program() -> str:
@@ -194,14 +204,6 @@ def _options(args: argparse.Namespace, machine: Machine) -> ExtractOptions:
     return ExtractOptions(dialect=args.dialect, block_delete=args.block_delete, setup=setup)
 
 
-def _check_output(path: str | None) -> None:
-    if path is None:
-        return
-    folder = Path(path).parent
-    if str(folder) and not folder.is_dir():
-        raise UsageError(f"{path}: folder {folder} does not exist")
-
-
 def _print_notices(tp_notices: tuple, stream) -> None:
     for n in tp_notices[:MAX_NOTICES]:
         print(n, file=stream)
@@ -215,8 +217,7 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
         raise UsageError("give a program or --demo, not both")
     program = demo_program() if demo else args.program
     svg = args.svg if args.svg or not demo else DEMO_SVG
-    for out in (svg, args.json):
-        _check_output(out)
+    check_outputs((svg, args.json), (program, args.machine))
     machine, note = _machine(args)
     analysis = nc.analyze(program, machine, _options(args, machine))
     _print_notices(analysis.toolpath.notices, sys.stderr)
@@ -233,30 +234,37 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
 
 
 def cmd_profile(args: argparse.Namespace, nc: Ncperf) -> int:
-    if not args.dt > 0:
-        raise UsageError(f"--dt must be positive, got {args.dt}")
-    _check_output(args.csv)
+    if not (MIN_DT <= args.dt <= MAX_DT):
+        raise UsageError(f"--dt must be {MIN_DT:g} to {MAX_DT:g} s, got {args.dt:g}")
+    check_outputs((args.csv,), (args.program, args.machine))
     machine, note = _machine(args)
     analysis = nc.analyze(args.program, machine, _options(args, machine))
     _print_notices(analysis.toolpath.notices, sys.stderr)
     pr = analysis.profile
-    samples = pr.sample(args.dt)
+    n = pr.n_samples(args.dt)
+    if n > MAX_SAMPLES:
+        raise UsageError(
+            f"--dt {args.dt:g} s gives {n:,} samples over the {fmt_time(pr.cycle_time)} cycle "
+            f"(at most {MAX_SAMPLES:,}, about {MAX_SAMPLES * 60 // 10**9} GB of CSV): "
+            f"take --dt {pr.cycle_time / (MAX_SAMPLES - 1):.2g} or more"
+        )
     with atomic_writer(args.csv) as fh:
-        write_samples(samples, fh)
+        for first in range(0, n, SAMPLE_PIECE):  # bounded memory, however long the cycle
+            write_samples(pr.sample(args.dt, first=first, count=SAMPLE_PIECE), fh, header=not first)
     tp = analysis.toolpath
     print(f"ncperf profile: {tp.source} on {machine.name}{note}")
     print(
         f"  predicted cycle  {fmt_time(pr.cycle_time)} (programmed feed time "
         f"{fmt_time(tp.programmed_time)})"
     )
-    print(f"  csv              {args.csv} ({samples.t.size:,} samples every {args.dt:g} s)")
+    print(f"  csv              {args.csv} ({n:,} samples every {args.dt:g} s)")
     return 0
 
 
 def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
     if len(args.programs) < 2:
         raise UsageError("compare needs two or more programs")
-    _check_output(args.svg)
+    check_outputs((args.svg,), (*args.programs, args.machine))
     machine, note = _machine(args)
     rows, panels = [], []
     for program in args.programs:
@@ -289,8 +297,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     from core.engine.effects import setup_for
     from core.model.trace import TraceOptions
 
-    for out in (args.json, args.svg):
-        _check_output(out)
+    check_outputs((args.json, args.svg), (args.program, *args.traces, args.machine))
     machine, note = _machine(args)
     effects = nc.effects()
     if args.effects:
@@ -349,8 +356,8 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
     from core.model.machine import machine_from_toml_text, machine_text
     from core.model.trace import TraceOptions
 
-    _check_output(args.out)
     groups = [[args.program, *args.traces], *(args.also or [])]
+    check_outputs((args.out,), (*(f for g in groups for f in g), args.machine))
     for g in groups:
         if len(g) < 2:
             raise UsageError(f"--also {g[0]}: give the program and at least one trace")
@@ -421,7 +428,37 @@ def cmd_plugins(_: argparse.Namespace, nc: Ncperf) -> int:
     return 0
 
 
+class _Printable(io.TextIOBase):
+    """A terminal stream that shows every control character from an input as an escape
+    (:func:`printable`): whatever reaches the terminal, from any report, cannot act on it."""
+
+    def __init__(self, stream: Any) -> None:
+        self._stream = stream
+
+    def write(self, s: str) -> int:
+        self._stream.write(printable(s, lines=True))
+        return len(s)
+
+    def flush(self) -> None:
+        self._stream.flush()
+
+    def isatty(self) -> bool:
+        return bool(self._stream.isatty())
+
+    def fileno(self) -> int:
+        return int(self._stream.fileno())
+
+
 def main(argv: list[str] | None = None) -> int:
+    out, err = sys.stdout, sys.stderr
+    sys.stdout, sys.stderr = _Printable(out), _Printable(err)
+    try:
+        return _main(argv)
+    finally:
+        sys.stdout, sys.stderr = out, err
+
+
+def _main(argv: list[str] | None) -> int:
     try:
         nc = Ncperf()
     except NcperfError as exc:
@@ -430,12 +467,19 @@ def main(argv: list[str] | None = None) -> int:
     parser = _parser(nc)
     args = parser.parse_args(argv)
     try:
-        return int(args.run(args, nc))
+        with transaction():  # a failure leaves none of the run's outputs behind
+            return int(args.run(args, nc))
     except UsageError as exc:
         print(f"ncperf: {exc}", file=sys.stderr)
         return 2
     except NcperfError as exc:
         print(str(exc), file=sys.stderr)
+        return 1
+    except MemoryError:
+        print(
+            f"ncperf: out of memory ({args.command}); the input needs more than this machine has",
+            file=sys.stderr,
+        )
         return 1
     except KeyboardInterrupt:
         print("ncperf: interrupted", file=sys.stderr)

@@ -259,10 +259,11 @@ def _write_rows(fh: IO[str], rows: Iterator[str]) -> None:
         first = False
 
 
-def write_samples(samples: Samples, fh: IO[str]) -> None:
+def write_samples(samples: Samples, fh: IO[str], *, header: bool = True) -> None:
     """A sampled profile as CSV: t,x,y,z,v,line (s, mm, mm/s, 1-based line), the columns
-    of a measured trace."""
-    fh.write("t,x,y,z,v,line\n")
+    of a measured trace (``header=False``: the rows only, for the pieces after the first)."""
+    if header:
+        fh.write("t,x,y,z,v,line\n")
     cols = np.column_stack(
         [samples.t, samples.x, samples.y, samples.z, samples.v, samples.line.astype(np.float64)]
     )

@@ -24,6 +24,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.model import geometry as g
+from core.model.errors import InputError
 from core.model.sampling import PROJECTION_STEP, PathSamples, isotonic
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
@@ -293,8 +294,9 @@ def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True) -> Alignment:
         off = np.zeros(3)
         method = "line and feed"
         line = trace.line
-        # Each line's first move (lines without moves: the next move's start).
-        first_move = np.full(int(max(tp.line.max(), line.max())) + 2, -1, dtype=np.int64)
+        # Each line's first move (lines without moves: the next move's start). Sized by the
+        # program, not by the trace: a trace line of 2**31 is just a line the program lacks.
+        first_move = np.full(int(tp.line.max()) + 2, -1, dtype=np.int64)
         first_move[tp.line[::-1]] = np.arange(tp.n)[::-1]
         last_move = np.full_like(first_move, -1)
         last_move[tp.line] = np.arange(tp.n)
@@ -322,8 +324,25 @@ def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True) -> Alignment:
         far_share = float(np.mean(unknown))
         if far_share:
             notes.append(f"{far_share:.0%} of samples name lines the program does not have")
+    elif trace.v is not None:
+        # Only a feed (CSV t,v; SHDR Feed_Rate alone): the distance it covers from the
+        # program's start places each sample.
+        off = np.zeros(3)
+        method = "feed alone"
+        dt = np.diff(trace.t, prepend=trace.t[0])
+        v = trace.v
+        s = np.minimum(np.cumsum(np.concatenate([[0.0], v[:-1]]) * dt), end_s[-1])
+        line = tp.line[tp.move_at(s)]
+        dist = np.full(s.size, np.nan)
+        far_share = 0.0
+        notes.append(
+            "no positions and no program lines: each sample placed by the distance its feed "
+            "covered since the trace began, taken as the program's start"
+        )
     else:
-        raise ValueError("a trace needs positions, or program lines and a feed, to be aligned")
+        raise InputError(
+            "the trace has neither positions nor a feed: nothing to align", source=trace.source
+        )
 
     # Coverage: feed length between the first and last sample's place.
     lo, hi = float(s.min()), float(s.max())

@@ -46,6 +46,7 @@ not subtracted from the tangential budget.
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -325,13 +326,20 @@ class Profile:
             v[sel] = lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
         return v
 
-    def sample(self, dt: float = SAMPLE_DT) -> Samples:
-        """The profile every ``dt`` seconds from 0 to the cycle time (both ends included)."""
-        if not dt > 0:
-            raise ValueError(f"dt must be positive, got {dt}")
+    def n_samples(self, dt: float = SAMPLE_DT) -> int:
+        """How many samples :meth:`sample` gives every ``dt`` seconds (both ends included)."""
+        if not (dt > 0 and math.isfinite(dt)):
+            raise ValueError(f"dt must be positive and finite, got {dt}")
+        return int(math.floor(self.cycle_time / dt + TOL.rel_equal)) + 1
+
+    def sample(self, dt: float = SAMPLE_DT, *, first: int = 0, count: int | None = None) -> Samples:
+        """The profile every ``dt`` seconds from 0 to the cycle time (both ends included);
+        with ``first`` and ``count``, only samples ``first`` to ``first + count - 1`` of
+        them (a long profile is written in pieces of bounded memory)."""
+        n_all = self.n_samples(dt)
+        stop = n_all if count is None else min(n_all, first + count)
         tp = self.toolpath
-        n_s = int(np.floor(self.cycle_time / dt + TOL.rel_equal)) + 1
-        t = np.arange(n_s, dtype=np.float64) * dt
+        t = np.arange(first, max(stop, first), dtype=np.float64) * dt
         k = np.clip(np.searchsorted(self.start_time, t, side="right") - 1, 0, tp.n - 1)
         tau = t - self.start_time[k]
         t_up, t_dn, d_up, d_dn, d_cr = self.phases

@@ -10,6 +10,8 @@ from __future__ import annotations
 from collections import defaultdict
 from dataclasses import dataclass
 
+from core.model.text import printable
+
 #: Longest block text quoted in a message; a 50 MB line must not end up on the terminal.
 MAX_QUOTED = 60
 
@@ -65,7 +67,7 @@ class NcperfError(Exception):
         msg = f"{where}{self.message}"
         if self.text:
             msg += f": {self.text}"
-        return msg
+        return printable(msg)  # one line, nothing from the input acts on a terminal
 
 
 class InputError(NcperfError):
@@ -104,7 +106,7 @@ class Notice:
     def __str__(self) -> str:
         where = f"{self.source}:{self.line}:" if self.line is not None else f"{self.source}:"
         more = f" ({self.count} lines)" if self.count > 1 else ""
-        return f"{where} warning: {self.message}{more}"
+        return printable(f"{where} warning: {self.message}{more}")
 
 
 class Notes:

@@ -39,6 +39,7 @@ from __future__ import annotations
 import difflib
 import math
 import re
+import sys
 import tomllib
 from dataclasses import dataclass, field
 from importlib import resources
@@ -48,7 +49,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import NDArray
 
-from core.model.errors import MachineError, UsageError
+from core.model.errors import InputError, MachineError, UsageError
+from core.model.inputs import read_input_text
 from core.model.setup import PATH_MODES, ControllerSetup, Tool
 
 AXES = ("X", "Y", "Z")
@@ -241,6 +243,49 @@ def _check_keys(
             raise MachineError(f"missing key '{key}' in {where}", source=source, line=at)
 
 
+#: Deepest nesting of tables and arrays in a machine file (its own schema needs 3).
+MAX_DEPTH = 8
+#: Largest integer taken as a number: larger ones are not exactly a float, and one of 400
+#: digits is not a float at all.
+MAX_INT = 2**53
+#: Range of every positive machine value in mm and s (1 nm/min to 1e12 mm/s^3): outside it
+#: a value is a typing error, and a subnormal jerk (1e-310) turns the profile into NaN.
+PHYSICAL_MIN = 1e-9
+PHYSICAL_MAX = 1e12
+
+
+def _check_numbers(data: dict, source: str, text: str) -> None:
+    """Every number in the file an exact, normal float; nesting bounded."""
+    stack: list[tuple[object, str, str, int]] = [(data, "", "", 0)]
+    while stack:
+        value, key, table, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            raise MachineError(
+                f"'{key}' nested {depth} deep (a machine file needs at most {MAX_DEPTH})",
+                source=source,
+                line=_line_of(text, key, table) if key else None,
+            )
+        if isinstance(value, dict):
+            sub = f"{table}.{key}" if table and key else key
+            stack.extend((v, str(k), sub, depth + 1) for k, v in value.items())
+        elif isinstance(value, list):
+            stack.extend((v, key, table, depth + 1) for v in value)
+        elif isinstance(value, bool):
+            continue
+        elif isinstance(value, int) and abs(value) > MAX_INT:
+            raise MachineError(
+                f"'{key}' is an integer of {len(str(abs(value)))} digits; not a machine value",
+                source=source,
+                line=_line_of(text, key, table),
+            )
+        elif isinstance(value, float) and 0 < abs(value) < sys.float_info.min:
+            raise MachineError(
+                f"'{key}' = {value!r} is too small to compute with (subnormal)",
+                source=source,
+                line=_line_of(text, key, table),
+            )
+
+
 def _number(value: object, key: str, name: str, source: str, text: str) -> float:
     where = f"[{name}]"
     line = _line_of(text, key, name)
@@ -253,6 +298,14 @@ def _number(value: object, key: str, name: str, source: str, text: str) -> float
         allowed = "a positive number" + (" or inf" if key in MAY_BE_INFINITE else "")
         raise MachineError(
             f"'{key}' in {where} must be {allowed}, got {value!r}", source=source, line=line
+        )
+    scale = AXIS_KEYS.get(key) or CONTROLLER_KEYS.get(key) or ROTARY_KEYS.get(key) or 1.0
+    lo, hi = PHYSICAL_MIN, PHYSICAL_MAX
+    if math.isfinite(v) and not lo <= v * scale <= hi:
+        raise MachineError(
+            f"'{key}' in {where} = {value!r} is outside the physical range of a machine",
+            source=source,
+            line=line,
         )
     return v
 
@@ -267,6 +320,11 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         raise MachineError(
             f"not valid TOML: {msg}", source=source, line=int(m.group(1)) if m else None
         ) from None
+    except RecursionError:
+        raise MachineError(
+            "not valid TOML for a machine: arrays or tables nested too deeply", source=source
+        ) from None
+    _check_numbers(data, source, text)
     effects = _effects(data.pop("effects", {}), source, text)
     _check_keys(data, TOP_KEYS, "", source, text, OPTIONAL_TOP_KEYS)
     name = data["name"]
@@ -488,14 +546,9 @@ def load_machine_file(path: str | Path) -> Machine:
     """Load a machine TOML file."""
     p = Path(path)
     try:
-        raw = p.read_bytes()
-    except OSError as exc:
-        raise MachineError(f"cannot read machine file: {exc.strerror}", source=str(p)) from None
-    try:
-        text = raw.decode("utf-8")
-    except UnicodeDecodeError as exc:
-        line = raw.count(b"\n", 0, exc.start) + 1
-        raise MachineError("not a UTF-8 text file", source=str(p), line=line) from None
+        text = read_input_text(p, what="a machine file")
+    except InputError as exc:
+        raise MachineError(exc.message, source=exc.source, line=exc.line) from None
     return machine_from_toml_text(text, str(p))
 
 
@@ -525,11 +578,10 @@ def machine_text(spec: str | None) -> str:
         name = spec or DEFAULT_PRESET
         res = resources.files("core.model") / "presets" / f"{name}.toml"
         return res.read_text(encoding="utf-8")
-    p = Path(spec)
     try:
-        return p.read_text(encoding="utf-8")
-    except (OSError, UnicodeDecodeError) as exc:
-        raise MachineError(f"cannot read machine file: {exc}", source=str(p)) from None
+        return read_input_text(spec, what="a machine file")
+    except InputError as exc:
+        raise MachineError(exc.message, source=exc.source, line=exc.line) from None
 
 
 def resolve_machine(spec: str | None) -> Machine:
