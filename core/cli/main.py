@@ -32,7 +32,7 @@ from core.model.machine import (
     preset_names,
     resolve_machine,
 )
-from core.model.text import printable
+from core.model.text import printable, printable_tree
 from core.model.toolpath import ExtractOptions
 from core.view.targets import VIEWS, ComparisonTarget, FileTarget
 
@@ -334,7 +334,8 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
         import json
 
         with atomic_writer(args.json) as fh:
-            json.dump(to_json(d, machine, nc.effects()), fh, indent=1)
+            data = printable_tree(to_json(d, machine, nc.effects()))
+            json.dump(data, fh, indent=1, allow_nan=False)
             fh.write("\n")
         print(f"  json             {args.json}")
     if args.svg:

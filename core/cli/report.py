@@ -14,6 +14,7 @@ import numpy as np
 
 from core.engine.indicators import REDUCTION_LABELS, reduction_class
 from core.engine.profile import Samples
+from core.model.text import printable_tree
 from core.model.toolpath import KIND_LABELS
 from core.view.analysis import Analysis, totals
 
@@ -177,7 +178,7 @@ def write_json(an: Analysis, fh: IO[str]) -> None:
             for z in an.annotations.zones
         ],
     }
-    text = json.dumps(head, indent=1, allow_nan=False)
+    text = json.dumps(printable_tree(head), indent=1, allow_nan=False)
     fh.write(text[:-2] + ",\n")  # reopen the object for the two big arrays
 
     j = ev.junction

@@ -27,7 +27,7 @@ MAX_DWELL = 86_400.0
 MAX_SWEEP = 2 * np.pi * 1e4
 
 
-def _first_bad(bad: np.ndarray) -> int | None:
+def _first_bad(bad: object) -> int | None:
     idx = np.flatnonzero(bad)
     return int(idx[0]) if idx.size else None
 

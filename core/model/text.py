@@ -48,3 +48,14 @@ def printable(text: str, *, lines: bool = False) -> str:
     if _SURROGATE.search(out):
         out = _SURROGATE.sub(_surrogate, out)
     return out
+
+
+def printable_tree(value: object) -> object:
+    """A JSON-ready value with :func:`printable` applied to every string in it (keys too)."""
+    if isinstance(value, str):
+        return printable(value)
+    if isinstance(value, dict):
+        return {printable_tree(k): printable_tree(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [printable_tree(v) for v in value]
+    return value

@@ -5,12 +5,14 @@ Units: lengths mm, times s, feeds mm/s (the reports convert at their edge).
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 
 import numpy as np
 
 from core.engine.indicators import Evaluation
 from core.engine.profile import Profile
+from core.model.errors import InputError
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.view.annotations import Annotations
@@ -58,7 +60,7 @@ def totals(an: Analysis) -> dict[str, float | int]:
     tp, ev = an.toolpath, an.evaluation
     feed = tp.is_feed
     below = feed & (tp.length < ev.min_length)
-    return {
+    out = {
         "moves": tp.n,
         "feed_moves": int(feed.sum()),
         "arcs": int(tp.is_arc.sum()),
@@ -78,3 +80,13 @@ def totals(an: Analysis) -> dict[str, float | int]:
         "rotary_only_moves": 0 if tp.rotary_only is None else len(tp.rotary_only),
         "rotary_only_time_s": float(an.profile.lead + an.profile.rest.sum() - tp.dwell.sum()),
     }
+    bad = [k for k, v in out.items() if not math.isfinite(v)]
+    if bad:
+        # The readers' range checks keep this from happening; should a new path slip through,
+        # the user gets a one-line error, not "nan" in the summary or the JSON.
+        raise InputError(
+            f"the prediction is not finite ({', '.join(bad)}): a value in the program or the "
+            "machine file is beyond what ncperf can compute with",
+            source=tp.source,
+        )
+    return out
