@@ -11,6 +11,7 @@ the source line of the first value outside them.
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import ArrayLike
 
 from core.model.errors import InputError
 from core.model.toolpath import ToolPath
@@ -27,7 +28,7 @@ MAX_DWELL = 86_400.0
 MAX_SWEEP = 2 * np.pi * 1e4
 
 
-def _first_bad(bad: object) -> int | None:
+def _first_bad(bad: ArrayLike) -> int | None:
     idx = np.flatnonzero(bad)
     return int(idx[0]) if idx.size else None
 
