@@ -91,6 +91,7 @@ class Ncperf:
         else:
             ev = self.evaluate(tp, machine)
             profile = build_profile(ev)
+        tp.release_derived()  # the models are done with them; the peak is in what follows
         return Analysis(tp, ev, profile, build_annotations(ev, profile))
 
     def run(

@@ -350,3 +350,12 @@ def test_fifo_as_an_input_does_not_hang(tmp_path, role):
         timeout=60,
     )
     assert r.returncode == 1 and "is a FIFO" in r.stderr and "Traceback" not in r.stderr
+
+
+def test_usage_errors_are_one_line(program, capsys):
+    """argparse's own error prints the usage block first; ncperf's is one line, exit 2."""
+    with pytest.raises(SystemExit) as exc:
+        main(["analyze", str(program), "--view", "bogus\x1b[31m"])
+    assert exc.value.code == 2
+    err = capsys.readouterr().err
+    assert len(err.splitlines()) == 1 and "invalid choice" in err and not CONTROL.search(err)

@@ -170,7 +170,8 @@ class Interpreter:
         """Per active line: the value of letter ``ch`` (NaN if absent); error if twice."""
         idx = np.flatnonzero(self.w.letter == ord(ch))
         if idx.size == 0:
-            return np.full(self.na, np.nan), np.zeros(self.na, dtype=bool)
+            # Read-only views of one value: a letter the program never writes costs nothing.
+            return np.broadcast_to(np.nan, (self.na,)), np.broadcast_to(False, (self.na,))
         li = self.li[idx]
         if li.size > 1:
             dup = np.flatnonzero(li[1:] == li[:-1])
@@ -332,7 +333,7 @@ class Interpreter:
         if dup.size:
             k = gi[modal][order][dup[0] + 1]
             raise self.error(w.line[k], "two G-codes of the same modal group in one block")
-        self.g = np.full((W.N_GROUPS, self.na), -1, dtype=np.int64)
+        self.g = np.full((W.N_GROUPS, self.na), -1, dtype=np.int32)  # G-codes x 10 fit
         self.g[group[modal], li[modal]] = code[modal]
         # Codes that only pass: remembered per line for the P/Q checks.
         self.g_pass_line = np.zeros(self.na, dtype=bool)

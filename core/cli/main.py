@@ -14,7 +14,7 @@ import os
 import sys
 from importlib import resources
 from pathlib import Path
-from typing import Any
+from typing import Any, NoReturn
 
 from core._version import __version__
 from core.cli.compare import ranked
@@ -53,8 +53,15 @@ def demo_program() -> str:
     return str(resources.files("examples") / DEMO_PROGRAM)
 
 
+class _Parser(argparse.ArgumentParser):
+    """argparse with a one-line usage error (its own prints the usage block first)."""
+
+    def error(self, message: str) -> NoReturn:
+        self.exit(2, printable(f"{self.prog}: {message} (see {self.prog} --help)") + "\n")
+
+
 def _parser(nc: Ncperf) -> argparse.ArgumentParser:
-    p = argparse.ArgumentParser(
+    p = _Parser(
         prog="ncperf",
         description="Predict where a machine tool will fall below the programmed feed, and why "
         "(Tapie, Mawussi, Anselmetti: machining strategy choice, performance viewer).",

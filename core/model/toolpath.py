@@ -264,6 +264,22 @@ class ToolPath:
             return line
         return f"{line} of {self.origins[int(self.origin[k])]}"
 
+    #: Derived (n, 3) columns the models need once: :meth:`release_derived` frees them.
+    _DERIVED = (
+        "tangent_start",
+        "tangent_end",
+        "curvature_vector_start",
+        "curvature_vector_end",
+        "axis_share",
+        "_samples",
+    )
+
+    def release_derived(self) -> None:
+        """Forget the derived direction columns (recomputed if asked for again): 120 bytes
+        a move that a finished analysis no longer needs."""
+        for name in self._DERIVED:
+            self.__dict__.pop(name, None)
+
     # ------------------------------------------------------------------ basics
     def __len__(self) -> int:
         return int(self.kind.shape[0])
