@@ -359,3 +359,20 @@ def test_usage_errors_are_one_line(program, capsys):
     assert exc.value.code == 2
     err = capsys.readouterr().err
     assert len(err.splitlines()) == 1 and "invalid choice" in err and not CONTROL.search(err)
+
+
+def test_shdr_with_part_of_the_positions(tmp_path, capsys, program):
+    """Xact recorded without Yact and Zact (found by the fuzzer: a KeyError)."""
+    tr = tmp_path / "t.shdr"
+    tr.write_text(_shdr([(k, f"Xact|{k}|Feed_Rate|100") for k in range(30)]))
+    rc, _, errors = cli(capsys, "diagnose", program, tr)
+    assert rc == 1 and "positions need all of Xact, Yact, Zact" in errors[0]
+
+
+def test_compare_a_program_without_feed_moves(tmp_path, capsys, program):
+    """Its mean feed is "-", not "nan" (found by the fuzzer)."""
+    rapids = tmp_path / "rapids.nc"
+    rapids.write_text("G21 G90\nG0 X0 Y0 Z5\nG0 X10 Y10\nM30\n")
+    rc, out, _ = cli(capsys, "compare", program, rapids)
+    assert rc == 0 and not re.search(r"\bnan\b", out)
+    assert re.search(r"rapids\.nc .* - mm/min", out)

@@ -216,6 +216,12 @@ def read_shdr_trace(path: Path, options: TraceOptions) -> Trace:
         first = t if first is None else first
         for key, value in zip(parts[1::2], parts[2::2], strict=True):
             events.setdefault(key, []).append((t - first, value, k))
+    partial = next(
+        (p for p in _POS_KEYS if any(k in events for k in p) and not all(k in events for k in p)),
+        None,
+    )
+    if partial:
+        raise InputError(f"positions need all of {', '.join(partial)}", source=name)
     if "Feed_Rate" not in events and not any(p[0] in events for p in _POS_KEYS):
         raise InputError(
             "no Feed_Rate and no positions (Xact/Yact/Zact) in the recording", source=name

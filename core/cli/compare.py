@@ -22,7 +22,7 @@ class Row:
     cycle_time: float
     share_at_90: float
     zones: int
-    mean_feed: float
+    mean_feed: float  # NaN for a program without feed moves (printed as "-")
     worst_zone: str
 
 
@@ -70,9 +70,10 @@ def table(rows: list[Row], machine: str) -> str:
     for k, r in enumerate(rows, start=1):
         slower = (r.cycle_time / best - 1) * 100 if best > 0 else 0.0
         name = r.label if len(r.label) <= 28 else "..." + r.label[-25:]
+        mean = f"{r.mean_feed:7,.0f}" if np.isfinite(r.mean_feed) else f"{'-':>7s}"
         out.append(
             f"{k:2d}  {name:28s} {r.feed_length:9.1f} mm {fmt_time(r.programmed_time):>12s} "
             f"{fmt_time(r.cycle_time):>12s} {slower:+7.1f}% {r.share_at_90 * 100:7.1f}% "
-            f"{r.zones:6d} {r.mean_feed:7,.0f} mm/min  {r.worst_zone}"
+            f"{r.zones:6d} {mean} mm/min  {r.worst_zone}"
         )
     return "\n".join(out)
