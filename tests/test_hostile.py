@@ -376,3 +376,23 @@ def test_compare_a_program_without_feed_moves(tmp_path, capsys, program):
     rc, out, _ = cli(capsys, "compare", program, rapids)
     assert rc == 0 and not re.search(r"\bnan\b", out)
     assert re.search(r"rapids\.nc .* - mm/min", out)
+
+
+@pytest.mark.parametrize(
+    ("name", "text"),
+    [
+        # 1000 mm in pecks of 0.0001 mm: ten million pecks (it hung)
+        ("p.ngc", "G21 G90 G17\nG0 X0 Y0 Z10\nG83 X1 Y0 Z-1000 R1 Q0.0001 F100\nG80\nM30\n"),
+        ("p.ngc", "G21 G90 G17\nG0 X0 Y0 Z10\nG73 X1 Y0 Z-1000 R1 Q0.0001 F100\nG80\nM30\n"),
+        (
+            "p.cl",
+            "FEDRAT/100\nGOTO/0,0,10\nCYCLE/DEEP,FEDTO,1000,STEP,0.00001,RAPTO,1,MMPM,100\n"
+            "GOTO/1,0,0\nCYCLE/OFF\nFINI\n",
+        ),
+    ],
+)
+def test_pecks_are_bounded(tmp_path, capsys, name, text):
+    p = tmp_path / name
+    p.write_text(text)
+    rc, _, errors = cli(capsys, "analyze", p)
+    assert rc == 1 and "more than 10,000 in one hole" in errors[0]

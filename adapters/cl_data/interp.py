@@ -54,7 +54,7 @@ from adapters.cl_data.records import Record, leading_numbers, number, numbers, r
 from adapters.cl_data.source import FastGotos, Source
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
-from core.model.limits import MAX_TOOL
+from core.model.limits import MAX_PECKS, MAX_TOOL
 from core.model.tolerances import TOL
 from core.model.toolpath import (
     POINTS_DROPPED,
@@ -657,6 +657,12 @@ class Reader:
         kind = c["kind"]
         peck = c.get("peck")
         if kind in ("DEEP", "BRKCHP", "DEEP2") and peck:
+            smallest = min(peck, c.get("subpeck") or peck)
+            if (c["depth"] + c["clear"]) / smallest > MAX_PECKS:
+                raise self._error(
+                    rec,
+                    f"CYCLE/{kind}: pecks of {smallest:g} mm: more than {MAX_PECKS:,} in one hole",
+                )
             step = peck
             reached = -c["clear"]
             while reached + step < c["depth"]:

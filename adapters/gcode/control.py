@@ -29,7 +29,7 @@ from adapters.gcode import words as W
 from adapters.gcode.comp import Compensator
 from adapters.gcode.interp import State
 from core.model.errors import Notes
-from core.model.limits import MAX_TOOL
+from core.model.limits import MAX_PECKS, MAX_TOOL
 from core.model.tolerances import TOL
 from core.model.toolpath import PathMode
 
@@ -1591,6 +1591,10 @@ class Controller:
             q = cy.get("q")
             if q is None or q <= 0:
                 raise ControlError(f"G{code // 10} without a positive peck depth Q")
+            if (r - bottom) / q > MAX_PECKS:
+                raise ControlError(
+                    f"G{code // 10} pecks of Q{q:g} mm: more than {MAX_PECKS:,} in one hole"
+                )
             depth = r - q
             while depth > bottom:
                 feed(a, b, depth)
@@ -1752,6 +1756,11 @@ class Controller:
             first = fdep if fdep is not None else rfp - abs(fdpr or 0.0)
             step = (rfp - first) if first is not None else rfp - depth
             level = first
+            if level > depth and not (step > 0 and (level - depth) / step <= MAX_PECKS):
+                raise ControlError(
+                    f"{name} pecks of {step:g} mm: not positive, or more than {MAX_PECKS:,} "
+                    "in one hole"
+                )
             while level > depth:
                 self.add(1, self.pos, at(level), self.rot, exact=True)
                 self._add_dwell(dtb)

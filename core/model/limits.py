@@ -76,3 +76,7 @@ def check_toolpath(tp: ToolPath) -> None:
 
 #: Largest tool number (the tool column is int32; T9999999999 would wrap around).
 MAX_TOOL = 2**31 - 1
+
+#: Most pecks in one drilled hole (G73/G83, Siemens CYCLE83, APT CYCLE/DEEP): a 100 mm hole
+#: in 0.01 mm pecks. Q0.0001 on a 1 m hole would be ten million moves of nothing.
+MAX_PECKS = 10_000
