@@ -100,6 +100,7 @@ def arm(seconds: float) -> None:
 
 def disarm() -> None:
     signal.setitimer(signal.ITIMER_REAL, 0)
+    _ALARM["sample"] = None  # the sampled frames hold the input's memory
 
 
 def _alarm(signum: int, frame: Any) -> None:

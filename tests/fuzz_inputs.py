@@ -1383,7 +1383,7 @@ def cli_case(rng: Rng, commands: Sequence[str] | None = None) -> CliCase:
             opts += ["--trace-units", rng.choice(("mm", "inch"))]
         if chance(rng, 0.2):
             opts += ["--trace-kind", rng.choice(("setpoint", "actual"))]
-        if chance(rng, 0.7):
+        if clean or chance(rng, 0.7):  # all effects: ~5 s a diagnosis; one or two: ~1 s
             effects = ["feed_override", "arc_acceleration", "servo_lag", "corner_tolerance"]
             if not clean:
                 effects += ["x", "", "acceleration_ramps"]

@@ -12,9 +12,9 @@ run was given exists afterwards (nor a temporary ``.part`` file); on success the
 without NaN or Infinity, the SVG is well-formed XML, the CSV holds finite numbers.
 
 Inputs come from :mod:`tests.fuzz_inputs` (grammars of G-code, CL data, traces, mutated
-examples and machine presets, random bytes), driven either by Hypothesis ``randoms()`` (a
-failure shrinks to a small input) or by a seeded ``random.Random`` (the seed is shown);
-``derandomize=True`` makes every CI run try the same inputs.
+examples and machine presets, random bytes), driven either by Hypothesis ``randoms()`` or by a
+seeded ``random.Random`` (the seed is shown); ``derandomize=True`` makes every CI run try the
+same inputs.
 ``benchmarks/fuzz.py`` runs the same generators and the same checks for minutes.
 """
 
@@ -55,17 +55,18 @@ TIME_LIMIT = 20
 #: Address space one input may add to the process.
 MEMORY_LIMIT = 3 << 30
 
+#: No shrinking: an input that hangs or fills memory would be retried for minutes, and a
+#: command line run costs up to seconds. A failure is reported as found, its input files in
+#: Hypothesis' notes; ``benchmarks/fuzz.py`` minimizes what it finds.
 FUZZ = settings(
-    max_examples=40,
+    max_examples=150,
     deadline=None,
     derandomize=True,
     database=None,
     print_blob=True,
     suppress_health_check=list(HealthCheck),
+    phases=[Phase.explicit, Phase.reuse, Phase.generate],
 )
-#: A command line run costs 0.05 to 5 s: shrinking one would take minutes, so the command
-#: line tests report the first failing case as found (its files are in the notes).
-NO_SHRINK = settings(FUZZ, phases=[Phase.explicit, Phase.reuse, Phase.generate])
 
 #: What no terminal output may contain: C0 controls but tab and newline, DEL, C1 controls,
 #: Unicode line/paragraph separators and bidi overrides (printable() escapes them all).
@@ -430,8 +431,8 @@ class SeededRandom(random.Random):
         return f"SeededRandom({self.seed_value})"
 
 
-#: Hypothesis' own random (it shrinks, but favours the first choice of every draw) or a seeded
-#: ``random.Random`` (spread evenly over the generators' choices, as the long fuzz run is).
+#: Hypothesis' own random (it favours the first choice of every draw: small, plain inputs) or a
+#: seeded ``random.Random`` (spread evenly over the generators' choices, as the long fuzz run).
 rngs = st.one_of(st.randoms(use_true_random=False), st.integers(0, 2**32 - 1).map(SeededRandom))
 machines = st.sampled_from(sorted(MACHINES))
 
@@ -526,7 +527,7 @@ def test_machine_toml(tmp_path: Path, rng: random.Random) -> None:
 
 
 # ----------------------------------------------------------------------------- command line
-@settings(NO_SHRINK, max_examples=50)
+@settings(FUZZ, max_examples=60)
 @given(rng=rngs)
 def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str], rng: random.Random) -> None:
     case = F.cli_case(rng, ("analyze", "profile", "compare", "machines", "plugins"))
@@ -534,7 +535,7 @@ def test_cli(tmp_path: Path, capsys: pytest.CaptureFixture[str], rng: random.Ran
         run_cli_case(case, folder, rng, _capsys_call(capsys))
 
 
-@settings(NO_SHRINK, max_examples=5)
+@settings(FUZZ, max_examples=6)
 @given(rng=rngs)
 def test_cli_diagnose(
     tmp_path: Path, capsys: pytest.CaptureFixture[str], rng: random.Random

@@ -42,9 +42,10 @@ MAX_NOTICES = 10
 #: ``profile --dt`` range, s: 1 us (a thousand times finer than a servo cycle) to 1 min.
 MIN_DT = 1e-6
 MAX_DT = 60.0
-#: Most rows ``profile`` writes: 100 million (28 hours at 1 ms, about 6 GB of CSV); the
-#: samples are computed and written in pieces of SAMPLE_PIECE, so memory stays bounded.
-MAX_SAMPLES = 100_000_000
+#: Most rows ``profile`` writes: 20 million (5.5 hours at 1 ms, about 1.2 GB of CSV, written
+#: in about a minute and a half); the samples are computed and written in pieces of
+#: SAMPLE_PIECE, so memory stays bounded. Longer cycles take a larger --dt.
+MAX_SAMPLES = 20_000_000
 SAMPLE_PIECE = 262_144
 
 
