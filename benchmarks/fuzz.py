@@ -258,6 +258,15 @@ def _hang_site(exc: Timeout) -> str | None:
     return site
 
 
+def _free(exc: BaseException) -> None:
+    """Clear the locals of every frame the exception holds, first thing: after a MemoryError
+    or a hang they hold the gigabytes (the sites are still read from the frames' code)."""
+    chained: BaseException | None = exc
+    while chained is not None:
+        traceback.clear_frames(chained.__traceback__)
+        chained = chained.__cause__ or chained.__context__
+
+
 def classify(exc: BaseException) -> Finding:
     if isinstance(exc, P.PropertyViolation):
         key, kind = f"property: {exc.kind}", "property"
@@ -265,11 +274,7 @@ def classify(exc: BaseException) -> Finding:
         key, kind = f"Timeout in {_hang_site(exc) or _site(exc.__traceback__)}", "crash"
     else:
         key, kind = f"{type(exc).__name__} at {_site(exc.__traceback__)}", "crash"
-    # Free the frames' locals before formatting: after a MemoryError they hold the gigabytes.
-    chained: BaseException | None = exc
-    while chained is not None:
-        traceback.clear_frames(chained.__traceback__)
-        chained = chained.__cause__ or chained.__context__
+    _free(exc)
     msg = f"{type(exc).__name__}: {exc}"[:500]
     return Finding(key, kind, msg, "".join(traceback.format_exception(exc)))
 
@@ -285,6 +290,7 @@ def attempt(target: str, inp: Input, timeout: float) -> tuple[Finding | None, li
         try:
             run_input(target, inp, folder)
         except (Timeout, Exception) as exc:  # MemoryError included
+            _free(exc)
             error = exc
         finally:
             disarm()

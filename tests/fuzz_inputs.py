@@ -210,6 +210,8 @@ class _Gcode:
         return number(self.rng, self.edge, lo, hi)
 
     def pos(self, lo: float = 1.0, hi: float = 6000.0) -> str:
+        if not self.edge and lo == 1.0:
+            lo = 300.0  # a plain program's feeds: cycles of minutes, not hours
         return positive(self.rng, self.edge, lo, hi)
 
     def var(self) -> str:
@@ -888,7 +890,7 @@ def cl_program(rng: Rng, max_lines: int = 24, edge: float | None = None) -> str:
     if chance(rng, 0.4):
         lines.append("LOADTL/1")
     if chance(rng, 0.8) or not edge:
-        lines.append(f"FEDRAT/MMPM,{plain_number(rng, 100, 3000).lstrip('-')}")
+        lines.append(f"FEDRAT/MMPM,{plain_number(rng, 300, 3000).lstrip('-')}")
     if chance(rng, 0.6):
         lines.append(f"GOTO/{plain_number(rng)},{plain_number(rng)},{plain_number(rng)}")
     budget = rng.randint(1, max_lines)

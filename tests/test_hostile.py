@@ -396,3 +396,27 @@ def test_pecks_are_bounded(tmp_path, capsys, name, text):
     p.write_text(text)
     rc, _, errors = cli(capsys, "analyze", p)
     assert rc == 1 and "more than 10,000 in one hole" in errors[0]
+
+
+def test_calibrate_with_a_file_name_that_is_not_utf8(tmp_path, capsys):
+    """The written TOML's header quotes the program's name: it crashed the UTF-8 writer
+    (found by tests/test_fuzz_properties.py)."""
+    p = tmp_path / os.fsdecode(b"bad\xffbyte.ngc")
+    p.write_text("G21 G90 G17 G64\nG0 X0 Y0 Z1\nG1 Z0 F600\nG1 X10\nG1 Y10\nG1 X0\nM30\n")
+    trace = tmp_path / "t.csv"
+    assert cli(capsys, "profile", p, "--csv", trace, "--machine", "linuxcnc-sim")[0] == 0
+    out = tmp_path / "m.toml"
+    rc, _, _ = cli(
+        capsys,
+        "calibrate",
+        p,
+        trace,
+        "--machine",
+        "linuxcnc-sim",
+        "--out",
+        out,
+        "--effects",
+        "block_cycle_time",
+    )
+    assert rc == 0
+    assert "bad\\xffbyte.ngc" in out.read_text(encoding="utf-8")

@@ -415,6 +415,8 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
             "Calibrated: " + (", ".join(c.name for c in cal.effects) or "nothing") + ".",
         ]
     )
+    # File names from the command line may hold controls or bytes that are not UTF-8.
+    header = printable(header, lines=True)
     text = machine_toml(cal, machine_text(args.machine), machine, effects, header=header)
     machine_from_toml_text(text, args.out)  # what is written must load
     with atomic_writer(args.out) as fh:
