@@ -512,22 +512,21 @@ def test_cl_data(tmp_path: Path, rng: random.Random, ext: str, machine: str, mut
 units = st.sampled_from((None, "mm", "inch"))
 
 
+@pytest.mark.parametrize(("make", "name"), [(F.csv_trace, "t.csv"), (F.shdr_trace, "t.shdr")])
 @FUZZ
 @given(rng=rngs, unit=units, mutant=st.booleans())
-def test_csv_trace(tmp_path: Path, rng: random.Random, unit: str | None, mutant: bool) -> None:
-    text = F.csv_trace(rng, 30)
+def test_trace(
+    tmp_path: Path,
+    make: Callable[[random.Random, int], str],
+    name: str,
+    rng: random.Random,
+    unit: str | None,
+    mutant: bool,
+) -> None:
+    text = make(rng, 30)
     data = F.mutate_bytes(rng, text.encode(), F.TRACE_TOKENS, 2) if mutant else text.encode()
     with example_folder(tmp_path) as folder, limits():
-        run_trace(write_input(folder, "t.csv", data), unit)
-
-
-@FUZZ
-@given(rng=rngs, unit=units, mutant=st.booleans())
-def test_shdr_trace(tmp_path: Path, rng: random.Random, unit: str | None, mutant: bool) -> None:
-    text = F.shdr_trace(rng, 30)
-    data = F.mutate_bytes(rng, text.encode(), F.TRACE_TOKENS, 2) if mutant else text.encode()
-    with example_folder(tmp_path) as folder, limits():
-        run_trace(write_input(folder, "t.shdr", data), unit)
+        run_trace(write_input(folder, name, data), unit)
 
 
 # ----------------------------------------------------------------------------- machine files

@@ -33,7 +33,7 @@ from core.model.machine import (
     resolve_machine,
 )
 from core.model.text import printable, printable_tree
-from core.model.toolpath import ExtractOptions
+from core.model.toolpath import ExtractOptions, ToolPath
 from core.view.targets import VIEWS, ComparisonTarget, FileTarget
 
 DEMO_PROGRAM = "zlevel_cavity.ngc"
@@ -124,12 +124,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     d.add_argument(
         "--effects", metavar="A,B,...", help="only these effects (default: every registered effect)"
     )
-    d.add_argument("--trace-units", choices=("mm", "inch"), help="trace units (default mm)")
-    d.add_argument(
-        "--trace-kind",
-        choices=("setpoint", "actual"),
-        help="what the trace's positions are (default: from the reader)",
-    )
+    _trace_options(d, "the trace's")
     d.add_argument("--json", metavar="OUT", help="write the diagnosis as JSON")
     d.add_argument("--svg", metavar="OUT", help="the path coloured by gap, and feed plots")
     d.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
@@ -158,12 +153,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         metavar="A,B,...",
         help="only these controller effects (default: every one ncperf calibrates)",
     )
-    cal.add_argument("--trace-units", choices=("mm", "inch"), help="trace units (default mm)")
-    cal.add_argument(
-        "--trace-kind",
-        choices=("setpoint", "actual"),
-        help="what the traces' positions are (default: from the reader)",
-    )
+    _trace_options(cal, "the traces'")
 
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
     m.set_defaults(run=cmd_machines)
@@ -195,6 +185,48 @@ def _common(p: argparse.ArgumentParser) -> None:
         metavar="MM",
         help="tool radius for cutter compensation G41/G42 (default: the machine's tool table)",
     )
+
+
+def _trace_options(p: argparse.ArgumentParser, whose: str) -> None:
+    p.add_argument("--trace-units", choices=("mm", "inch"), help="trace units (default mm)")
+    p.add_argument(
+        "--trace-kind",
+        choices=("setpoint", "actual"),
+        help=f"what {whose} positions are (default: from the reader)",
+    )
+
+
+def _wanted(spec: str | None, known: list[str], unknown_message: str) -> list[str] | None:
+    """The names of a comma-separated ``--effects`` (None when not given); a name not in
+    ``known`` is a usage error: ``unknown_message`` formatted with ``names`` and ``known``."""
+    if not spec:
+        return None
+    wanted = [e.strip() for e in spec.split(",") if e.strip()]
+    unknown = [e for e in wanted if e not in known]
+    if unknown:
+        raise UsageError(unknown_message.format(names=", ".join(unknown), known=", ".join(known)))
+    return wanted
+
+
+def _aligned(
+    nc: Ncperf, tp: ToolPath, paths: list[str], args: argparse.Namespace, purpose: str
+) -> tuple[list, list[str]]:
+    """Each trace read (its warnings printed) and aligned on ``tp``, and its label; a trace
+    that does not align is an error ending "no ``purpose``"."""
+    from core.diagnosis.align import align
+    from core.model.trace import TraceOptions
+
+    options = TraceOptions(units=args.trace_units, kind=args.trace_kind)
+    alignments, labels = [], []
+    for path in paths:
+        tr = nc.read_trace(path, options)
+        _print_notices(tr.notices, sys.stderr)
+        al = align(tp, tr)
+        if not al.ok:
+            raise InputError(f"{al.message}; no {purpose}", source=path)
+        alignments.append(al)
+        labels.append(Path(path).name)
+    return alignments, labels
 
 
 def _machine(args: argparse.Namespace) -> tuple:
@@ -301,31 +333,17 @@ def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
 
 def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     from core.cli.diagnosis_report import report, to_json
-    from core.diagnosis.align import align
     from core.engine.effects import setup_for
-    from core.model.trace import TraceOptions
 
     check_outputs((args.json, args.svg), (args.program, *args.traces, args.machine))
     machine, note = _machine(args)
     effects = nc.effects()
-    if args.effects:
-        wanted = [e.strip() for e in args.effects.split(",") if e.strip()]
-        unknown = [e for e in wanted if e not in effects]
-        if unknown:
-            raise UsageError(f"unknown effect {', '.join(unknown)} (effects: {', '.join(effects)})")
+    wanted = _wanted(args.effects, list(effects), "unknown effect {names} (effects: {known})")
+    if wanted is not None:
         effects = {k: effects[k] for k in wanted}
     tp = nc.extract(args.program, _options(args, machine))
     _print_notices(tp.notices, sys.stderr)
-    options = TraceOptions(units=args.trace_units, kind=args.trace_kind)
-    alignments, labels = [], []
-    for path in args.traces:
-        tr = nc.read_trace(path, options)
-        _print_notices(tr.notices, sys.stderr)
-        al = align(tp, tr)
-        if not al.ok:
-            raise InputError(f"{al.message}; no diagnosis", source=path)
-        alignments.append(al)
-        labels.append(Path(path).name)
+    alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis")
     base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
     d = nc.diagnose([(tp, alignments, labels)], base, args.baseline, effects)
     print(
@@ -359,11 +377,9 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
 
     from core.cli.calibration_report import machine_toml
     from core.cli.calibration_report import report as cal_report
-    from core.diagnosis.align import align
     from core.diagnosis.calibrate import CONTROLLER_EFFECTS
     from core.engine.effects import setup_for
     from core.model.machine import machine_from_toml_text, machine_text
-    from core.model.trace import TraceOptions
 
     groups = [[args.program, *args.traces], *(args.also or [])]
     check_outputs((args.out,), (*(f for g in groups for f in g), args.machine))
@@ -373,28 +389,14 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
     machine, note = _machine(args)
     effects = nc.effects()
     names = [e for e in CONTROLLER_EFFECTS if e in effects]
-    if args.effects:
-        wanted = [e.strip() for e in args.effects.split(",") if e.strip()]
-        unknown = [e for e in wanted if e not in names]
-        if unknown:
-            raise UsageError(
-                f"cannot calibrate {', '.join(unknown)} (controller effects: {', '.join(names)})"
-            )
+    wanted = _wanted(args.effects, names, "cannot calibrate {names} (controller effects: {known})")
+    if wanted is not None:
         names = wanted
-    options = TraceOptions(units=args.trace_units, kind=args.trace_kind)
     cases, all_labels = [], []
     for program, *traces in groups:
         tp = nc.extract(program, _options(args, machine))
         _print_notices(tp.notices, sys.stderr)
-        als, labels = [], []
-        for path in traces:
-            tr = nc.read_trace(path, options)
-            _print_notices(tr.notices, sys.stderr)
-            al = align(tp, tr)
-            if not al.ok:
-                raise InputError(f"{al.message}; no calibration", source=path)
-            als.append(al)
-            labels.append(Path(path).name)
+        als, labels = _aligned(nc, tp, traces, args, "calibration")
         cases.append((tp, als, labels))
         all_labels += labels
     base = setup_for(machine, effects, ramps=True)

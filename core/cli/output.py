@@ -25,6 +25,7 @@ from pathlib import Path
 from typing import IO, Any
 
 from core.model.errors import NcperfError, UsageError
+from core.model.inputs import file_kind
 
 
 class OutputError(NcperfError):
@@ -35,19 +36,6 @@ class OutputError(NcperfError):
 _PENDING: contextvars.ContextVar[list[tuple[str, Path]] | None] = contextvars.ContextVar(
     "ncperf_pending_outputs", default=None
 )
-
-_KINDS = (
-    (stat.S_ISDIR, "a folder"),
-    (stat.S_ISLNK, "a symbolic link"),
-    (stat.S_ISCHR, "a character device"),
-    (stat.S_ISBLK, "a block device"),
-    (stat.S_ISFIFO, "a FIFO"),
-    (stat.S_ISSOCK, "a socket"),
-)
-
-
-def _kind(mode: int) -> str:
-    return next((name for test, name in _KINDS if test(mode)), "not a regular file")
 
 
 def check_target(path: str | os.PathLike[str]) -> None:
@@ -61,7 +49,9 @@ def check_target(path: str | os.PathLike[str]) -> None:
     except OSError as exc:
         raise UsageError(f"{target}: cannot write: {exc.strerror}") from None
     if st is not None and not stat.S_ISREG(st.st_mode):
-        raise UsageError(f"{target}: is {_kind(st.st_mode)}; ncperf only replaces regular files")
+        raise UsageError(
+            f"{target}: is {file_kind(st.st_mode)}; ncperf only replaces regular files"
+        )
     folder = target.parent
     if not folder.is_dir():
         raise UsageError(f"{target}: folder {folder} does not exist")
@@ -149,11 +139,7 @@ def atomic_writer(path: str | os.PathLike[str], *, binary: bool = False) -> Iter
             raise OutputError(f"cannot write: {exc.strerror}", source=str(target)) from None
         pending = _PENDING.get()
         if pending is None:
-            check_target(target)
-            try:
-                os.replace(tmp, target)
-            except OSError as exc:
-                raise OutputError(f"cannot write: {exc.strerror}", source=str(target)) from None
+            _commit([(tmp, target)])  # outside a transaction: replace at once
         else:
             pending.append((tmp, target))
     except BaseException:

@@ -21,11 +21,17 @@ MAX_INPUT_BYTES = 1 << 30
 
 _KINDS = (
     (stat.S_ISDIR, "a folder"),
+    (stat.S_ISLNK, "a symbolic link"),
     (stat.S_ISCHR, "a character device"),
     (stat.S_ISBLK, "a block device"),
     (stat.S_ISFIFO, "a FIFO"),
     (stat.S_ISSOCK, "a socket"),
 )
+
+
+def file_kind(mode: int) -> str:
+    """What a file that is not a regular file is, for messages ("a FIFO", "a folder"...)."""
+    return next((name for test, name in _KINDS if test(mode)), "not a regular file")
 
 
 def read_input(
@@ -44,8 +50,7 @@ def read_input(
     try:
         st = os.fstat(fd)
         if not stat.S_ISREG(st.st_mode):
-            kind = next((k for test, k in _KINDS if test(st.st_mode)), "not a regular file")
-            raise InputError(f"is {kind}, not {what}", source=name)
+            raise InputError(f"is {file_kind(st.st_mode)}, not {what}", source=name)
         if limit is None and st.st_size > MAX_INPUT_BYTES:
             raise InputError(
                 f"{st.st_size:,} bytes: larger than the {MAX_INPUT_BYTES >> 20:,} MiB ncperf reads",

@@ -544,12 +544,15 @@ def _effects(table: object, source: str, text: str) -> tuple:
 
 def load_machine_file(path: str | Path) -> Machine:
     """Load a machine TOML file."""
-    p = Path(path)
+    return machine_from_toml_text(_read_machine_file(path), str(path))
+
+
+def _read_machine_file(path: str | Path) -> str:
+    """A machine file's text; what cannot be read is a :class:`MachineError`."""
     try:
-        text = read_input_text(p, what="a machine file")
+        return read_input_text(path, what="a machine file")
     except InputError as exc:
         raise MachineError(exc.message, source=exc.source, line=exc.line) from None
-    return machine_from_toml_text(text, str(p))
 
 
 # ---------------------------------------------------------------------------- presets
@@ -578,10 +581,7 @@ def machine_text(spec: str | None) -> str:
         name = spec or DEFAULT_PRESET
         res = resources.files("core.model") / "presets" / f"{name}.toml"
         return res.read_text(encoding="utf-8")
-    try:
-        return read_input_text(spec, what="a machine file")
-    except InputError as exc:
-        raise MachineError(exc.message, source=exc.source, line=exc.line) from None
+    return _read_machine_file(spec)
 
 
 def resolve_machine(spec: str | None) -> Machine:
