@@ -420,3 +420,12 @@ def test_calibrate_with_a_file_name_that_is_not_utf8(tmp_path, capsys):
     )
     assert rc == 0
     assert "bad\\xffbyte.ngc" in out.read_text(encoding="utf-8")
+
+
+def test_toml_integer_beyond_pythons_digit_limit(tmp_path, capsys, program):
+    """5,000 digits: tomllib raises ValueError (Python's 4,300-digit int limit), which once
+    escaped as a traceback."""
+    m = tmp_path / "m.toml"
+    m.write_text("a = " + "9" * 5000 + "\n")
+    rc, _, errors = cli(capsys, "analyze", program, "--machine", m)
+    assert rc == 1 and "integer longer than" in errors[0] and errors[0].startswith(f"{m}:")

@@ -324,6 +324,14 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         raise MachineError(
             "not valid TOML for a machine: arrays or tables nested too deeply", source=source
         ) from None
+    except ValueError:
+        # tomllib converts integers with int(): one of over 4,300 digits raises ValueError
+        # (Python's integer-string limit), not TOMLDecodeError.
+        raise MachineError(
+            f"not valid TOML for a machine: an integer longer than {sys.get_int_max_str_digits():,}"
+            " digits",
+            source=source,
+        ) from None
     _check_numbers(data, source, text)
     effects = _effects(data.pop("effects", {}), source, text)
     _check_keys(data, TOP_KEYS, "", source, text, OPTIONAL_TOP_KEYS)
