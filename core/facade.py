@@ -10,37 +10,42 @@ import dataclasses
 from collections.abc import Mapping, Sequence
 from typing import TYPE_CHECKING
 
-import pluggy
-
-from core.engine.effects import Effect, Setup, setup_for
-from core.engine.indicators import Evaluation, Indicator, combine
-from core.engine.predict import Prediction, predict
-from core.engine.profile import build_profile
-from core.engine.rotary import missing_axes
 from core.model.errors import Notice, UsageError
-from core.model.limits import check_toolpath
-from core.model.machine import Machine
-from core.model.toolpath import ExtractOptions, ToolPath
-from core.model.trace import Trace, TraceOptions
-from core.plugins import make_plugin_manager
-from core.view.analysis import Analysis
-from core.view.annotations import Annotations, build_annotations
 
+# Importing the facade costs no numpy and loads no plugin: each method imports what it runs
+# (``ncperf --help`` builds an Ncperf for the plugins' commands only; issue 13).
 if TYPE_CHECKING:
+    import pluggy
+
     from core.diagnosis.align import Alignment
     from core.diagnosis.calibrate import Calibration
     from core.diagnosis.diagnose import Diagnosis
+    from core.engine.effects import Effect, Setup
+    from core.engine.indicators import Evaluation, Indicator
+    from core.engine.predict import Prediction
+    from core.model.machine import Machine
+    from core.model.toolpath import ExtractOptions, ToolPath
+    from core.model.trace import Trace, TraceOptions
+    from core.view.analysis import Analysis
+    from core.view.annotations import Annotations
 
 
 class Ncperf:
     """Runs the hooks of one plugin manager (a fresh one by default)."""
 
     def __init__(self, pm: pluggy.PluginManager | None = None) -> None:
-        self.pm = pm if pm is not None else make_plugin_manager()
+        if pm is None:
+            from core.plugins import make_plugin_manager
+
+            pm = make_plugin_manager()
+        self.pm = pm
 
     # A1
     def extract(self, source: object, options: ExtractOptions | None = None) -> ToolPath:
         """Read a tool path; UsageError when no adapter recognises the source."""
+        from core.model.limits import check_toolpath
+        from core.model.toolpath import ExtractOptions, ToolPath
+
         tp = self.pm.hook.ncperf_extract(source=source, options=options or ExtractOptions())
         if tp is None:
             raise UsageError(
@@ -55,6 +60,8 @@ class Ncperf:
     # A2
     def indicators(self, toolpath: ToolPath, machine: Machine) -> list[Indicator]:
         """Every plugin's indicator results, flattened."""
+        from core.engine.indicators import Indicator
+
         out: list[Indicator] = []
         for result in self.pm.hook.ncperf_evaluate(toolpath=toolpath, machine=machine):
             for ind in result:
@@ -65,6 +72,8 @@ class Ncperf:
 
     def evaluate(self, toolpath: ToolPath, machine: Machine) -> Evaluation:
         """The combined prediction of all plugins."""
+        from core.engine.indicators import combine
+
         return combine(toolpath, machine, self.indicators(toolpath, machine))
 
     # A3
@@ -82,6 +91,11 @@ class Ncperf:
     def analyze(
         self, source: object, machine: Machine, options: ExtractOptions | None = None
     ) -> Analysis:
+        from core.engine.effects import setup_for
+        from core.engine.profile import build_profile
+        from core.view.analysis import Analysis
+        from core.view.annotations import build_annotations
+
         tp = machine_notes(self.extract(source, options), machine)
         if machine.effects:
             # Effects the machine file switches on are part of its model (issue 5).
@@ -108,11 +122,15 @@ class Ncperf:
     def predict(self, toolpath: ToolPath, setup: Setup) -> Prediction:
         """The prediction of a :class:`~core.engine.effects.Setup` (a machine and the effects
         switched on) on a tool path, with this manager's plugins."""
+        from core.engine.predict import predict
+
         return predict(self.indicators, toolpath, setup)
 
     # traces
     def read_trace(self, source: object, options: TraceOptions | None = None) -> Trace:
         """Read a measured trace; UsageError when no reader recognises it."""
+        from core.model.trace import Trace, TraceOptions
+
         tr = self.pm.hook.ncperf_read_trace(source=source, options=options or TraceOptions())
         if tr is None:
             raise UsageError(
@@ -126,6 +144,8 @@ class Ncperf:
     # effects
     def effects(self) -> dict[str, Effect]:
         """Every registered effect by name, in registration order."""
+        from core.engine.effects import Effect
+
         out: dict[str, Effect] = {}
         for result in reversed(self.pm.hook.ncperf_effects()):
             for eff in result:
@@ -189,6 +209,8 @@ class Ncperf:
 def machine_notes(tp: ToolPath, machine: Machine) -> ToolPath:
     """The path with what the machine file does not say about it added to its notices
     (rotary axes the program turns but the file gives no limits for)."""
+    from core.engine.rotary import missing_axes
+
     missing = missing_axes(tp, machine)
     if not missing:
         return tp

@@ -291,12 +291,12 @@ def test_output_device_node_is_not_replaced(tmp_path, capsys, program):
 def test_failure_after_the_svg_leaves_no_output(tmp_path, capsys, program, monkeypatch):
     """The JSON fails after the SVG was written: neither exists afterwards, and a file the
     run would have replaced keeps its old content."""
-    cli_main = importlib.import_module("core.cli.main")
+    report = importlib.import_module("core.cli.report")  # analyze takes write_json from it
 
     def disk_full(*_a, **_k):
         raise OSError(errno.ENOSPC, os.strerror(errno.ENOSPC))
 
-    monkeypatch.setattr(cli_main, "write_json", disk_full)
+    monkeypatch.setattr(report, "write_json", disk_full)
     svg, js = tmp_path / "o.svg", tmp_path / "o.json"
     svg.write_text("old")
     rc, _, errors = cli(capsys, "analyze", program, "--svg", svg, "--json", js)

@@ -85,7 +85,7 @@ def test_third_party_plugin_all_hooks(tmp_path):
     assert canvas.drawn == [(1, [1])]  # 1 - 70.71/100 = 29 %: class 1, "10-30 %"
     # JSON and SVG name the indicator
     out = tmp_path / "r.json"
-    from core.facade import Analysis
+    from core import Analysis
 
     with open(out, "w") as fh:
         write_json(Analysis(arc, ev, build_profile(ev), ann), fh)
@@ -215,3 +215,68 @@ def test_plugin_reads_a_trace():
     assert tr.source == "sample trace" and len(tr) == 3 and tr.pos is None
     with pytest.raises(UsageError, match="no trace reader recognises"):
         nc.read_trace(object())
+
+
+@pytest.mark.parametrize("args", [["--help"], ["--version"], ["machines"]])
+def test_light_commands_load_no_numpy_and_no_model_plugin(args):
+    """--help, --version and machines build the parser from the plugins that add commands
+    only: neither numpy nor a model or reader plugin is imported (issue 13, start-up)."""
+    code = (
+        "import sys\nfrom core.cli import main\n"
+        f"try:\n    main({args!r})\nexcept SystemExit:\n    pass\n"
+        "mods = [m for m in sys.modules if m == 'numpy' or m.startswith('plugins')"
+        " or m.startswith(('adapters.gcode', 'adapters.svg', 'adapters.traces'))]\n"
+        "print('LOADED', mods, file=sys.stderr)"
+    )
+    import subprocess
+
+    out = subprocess.run(
+        [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, check=True
+    )
+    assert "LOADED []" in out.stderr
+    assert out.stdout  # the help, the version or the presets were printed
+
+
+def test_command_plugins_are_the_builtins_that_add_commands():
+    """COMMAND_PLUGINS (all the parser loads) lists exactly the built-ins with a command."""
+    from core.plugins import BUILTIN_PLUGINS, COMMAND_PLUGINS
+
+    adding = [
+        name
+        for name in BUILTIN_PLUGINS
+        if hasattr(importlib.import_module(name), "ncperf_add_commands")
+    ]
+    assert list(COMMAND_PLUGINS) == adding
+
+
+def test_completed_manager_runs_hooks_in_the_fresh_managers_order():
+    """The command line's manager, completed after parsing, calls every hook's plugins in
+    the order of a manager made in one go (first-result hooks pick the same adapter)."""
+    from core.plugins import command_plugin_manager, complete_plugin_manager
+
+    fresh = Ncperf(make_plugin_manager())
+    completed = Ncperf(complete_plugin_manager(command_plugin_manager()))
+    for hook in HOOKS:
+        assert completed.implementers(hook) == fresh.implementers(hook), hook
+
+
+@pytest.mark.parametrize(
+    ("text", "declared"),
+    [
+        ("[console_scripts]\nx = a:b\n", False),
+        ("[ncperf]\ndemo = demo_mod\n", True),
+        ("[console_scripts]\nx = a:b\n\n  [ ncperf ]  \ndemo = demo_mod\n", True),
+        ("[ncperf.extra]\ndemo = demo_mod\n", False),
+    ],
+)
+def test_entry_point_group_shortcut(tmp_path, monkeypatch, text, declared):
+    """The quick look for an ``[ncperf]`` section in the installed distributions' metadata
+    (which saves importing importlib.metadata) finds it wherever pluggy's loader would."""
+    from core.plugins import _declares_group
+
+    dist = tmp_path / "demo-1.0.dist-info"
+    dist.mkdir()
+    (dist / "entry_points.txt").write_text(text)
+    (tmp_path / "old-1.0.egg-info").write_text("Metadata-Version: 1.0\n")  # a file, no folder
+    monkeypatch.setattr(sys, "path", [str(tmp_path)])
+    assert _declares_group("ncperf") is declared

@@ -10,18 +10,44 @@ same object model in .NET and in Python for tests and Linux (``ncperf esprit --e
   anything else get None without pythonnet being imported.
 * A3 claims the same objects as targets and draws on the layer "ncperf performance".
 
-Importing this module imports numpy and core only: ``clr`` is loaded on first use
-(:mod:`adapters.esprit_com.clr_host`). What is assumed about ESPRIT is in one table,
+Importing this module imports neither numpy nor ``clr``: the hooks import what they run, and
+``clr`` is loaded on first use (:mod:`adapters.esprit_com.clr_host`), so the command line's
+parser can take ``ncperf esprit`` from here cheaply. What is assumed about ESPRIT is in one table,
 :mod:`adapters.esprit_com.object_model`.
 """
 
 from __future__ import annotations
 
 import argparse
+import importlib
+import os
+from typing import TYPE_CHECKING, Any
 
-from adapters.esprit_com.draw import Drawing, colorref, draw_annotations, plan_drawing
-from adapters.esprit_com.extract import EspritSource, document_of, read_esprit
-from core import Annotations, ExtractOptions, ToolPath, hookimpl
+from core.hookspecs import hookimpl
+
+if TYPE_CHECKING:
+    from adapters.esprit_com.draw import Drawing, colorref, draw_annotations, plan_drawing
+    from adapters.esprit_com.extract import EspritSource, document_of, read_esprit
+    from core import Annotations, ExtractOptions, ToolPath
+
+#: Public name -> the submodule that defines it (imported when first used).
+_EXPORTS = {
+    "Drawing": "adapters.esprit_com.draw",
+    "colorref": "adapters.esprit_com.draw",
+    "draw_annotations": "adapters.esprit_com.draw",
+    "plan_drawing": "adapters.esprit_com.draw",
+    "EspritSource": "adapters.esprit_com.extract",
+    "document_of": "adapters.esprit_com.extract",
+    "read_esprit": "adapters.esprit_com.extract",
+}
+
+
+def __getattr__(name: str) -> Any:
+    module = _EXPORTS.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    return getattr(importlib.import_module(module), name)
+
 
 __all__ = [
     "Drawing",
@@ -40,6 +66,10 @@ __all__ = [
 @hookimpl
 def ncperf_extract(source: object, options: ExtractOptions) -> ToolPath | None:
     """The operations of an ESPRIT document; None for anything that is not one."""
+    if source is None or isinstance(source, str | bytes | os.PathLike):
+        return None  # a file: nothing of ESPRIT's is imported
+    from adapters.esprit_com.extract import document_of, read_esprit
+
     if document_of(source) is None:
         return None
     return read_esprit(source)
@@ -48,6 +78,9 @@ def ncperf_extract(source: object, options: ExtractOptions) -> ToolPath | None:
 @hookimpl
 def ncperf_display(toolpath: ToolPath, annotations: Annotations, target: object) -> Drawing | None:
     """Draw into an ESPRIT document; None for any other target."""
+    from adapters.esprit_com.draw import draw_annotations
+    from adapters.esprit_com.extract import document_of
+
     doc = document_of(target)
     if doc is None:
         return None

@@ -10,17 +10,18 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import cast
+from typing import TYPE_CHECKING, cast
 
-from adapters.esprit_com.clr_host import DotnetUnavailable, attach_running_esprit
-from adapters.esprit_com.draw import Drawing
-from adapters.esprit_com.extract import EspritSource
-from adapters.esprit_com.object_model import LAYER_NAME
-from core.cli.report import summary
-from core.facade import Analysis, Ncperf
 from core.model.errors import UsageError
-from core.model.machine import DEFAULT_PRESET, Machine, resolve_machine
-from core.model.toolpath import ExtractOptions
+from core.model.preset_files import DEFAULT_PRESET
+
+# Adding the command to the parser imports no numpy (``ncperf --help``); running it does.
+if TYPE_CHECKING:
+    from adapters.esprit_com.draw import Drawing
+    from adapters.esprit_com.extract import EspritSource
+    from core.facade import Ncperf
+    from core.model.machine import Machine
+    from core.view.analysis import Analysis
 
 MAX_NOTICES = 10
 
@@ -67,6 +68,8 @@ def analyze_and_draw(
     nc: Ncperf, source: EspritSource, machine: Machine
 ) -> tuple[Analysis, Drawing]:
     """A1 -> A2 -> A3 on one ESPRIT document: the paper's Figure 5 inside ESPRIT."""
+    from adapters.esprit_com.draw import Drawing
+
     analysis = nc.analyze(source, machine)
     # Ncperf.display returns what the claiming ncperf_display hook returned (typed object);
     # for an EspritSource that is this adapter's Drawing.
@@ -75,6 +78,13 @@ def analyze_and_draw(
 
 
 def run_command(args: argparse.Namespace, nc: Ncperf) -> int:
+    from adapters.esprit_com.clr_host import DotnetUnavailable, attach_running_esprit
+    from adapters.esprit_com.extract import EspritSource
+    from adapters.esprit_com.object_model import LAYER_NAME
+    from core.cli.report import summary
+    from core.model.machine import resolve_machine
+    from core.model.toolpath import ExtractOptions
+
     if (args.python_twin or args.svg or args.dialect) and not args.emulate:
         raise UsageError("--python-twin, --svg and --dialect need --emulate PROGRAM")
     if args.svg:

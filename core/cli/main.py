@@ -12,29 +12,23 @@ import io
 import math
 import os
 import sys
-from importlib import resources
 from pathlib import Path
-from typing import Any, NoReturn
+from typing import TYPE_CHECKING, Any, NoReturn
 
 from core._version import __version__
-from core.cli.compare import ranked
-from core.cli.compare import row as compare_row
-from core.cli.compare import table as compare_table
 from core.cli.output import atomic_writer, check_outputs, transaction
-from core.cli.report import fmt_time, summary, write_json, write_samples
-from core.engine.profile import SAMPLE_DT
-from core.facade import Ncperf
 from core.model.errors import InputError, NcperfError, UsageError
-from core.model.machine import (
-    DEFAULT_PRESET,
-    Machine,
-    load_preset,
-    preset_names,
-    resolve_machine,
-)
+from core.model.preset_files import DEFAULT_PRESET
 from core.model.text import printable, printable_tree
-from core.model.toolpath import ExtractOptions, ToolPath
-from core.view.targets import VIEWS, ComparisonTarget, FileTarget
+from core.model.tolerances import SAMPLE_DT
+from core.view.targets import VIEWS
+
+# The parser and the light commands (--help, --version, machines) import neither numpy nor
+# the plugins: each command imports what it uses (issue 13: --help in under 0.15 s).
+if TYPE_CHECKING:
+    from core.facade import Ncperf
+    from core.model.machine import Machine
+    from core.model.toolpath import ExtractOptions, ToolPath
 
 DEMO_PROGRAM = "zlevel_cavity.ngc"
 DEMO_SVG = "ncperf-demo.svg"
@@ -51,7 +45,13 @@ SAMPLE_PIECE = 262_144
 
 def demo_program() -> str:
     """Path of the bundled Z-level demo program."""
-    return str(resources.files("examples") / DEMO_PROGRAM)
+    import importlib.util
+
+    # the bundled programs ship as files of the ``examples`` package (found, not imported)
+    spec = importlib.util.find_spec("examples")
+    if spec is None or spec.origin is None:
+        raise UsageError("the bundled examples are not installed (reinstall ncperf)")
+    return os.path.join(os.path.dirname(spec.origin), DEMO_PROGRAM)
 
 
 class _Parser(argparse.ArgumentParser):
@@ -156,10 +156,10 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     _trace_options(cal, "the traces'")
 
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
-    m.set_defaults(run=cmd_machines)
+    m.set_defaults(run=cmd_machines, plugins=False)
     pl = sub.add_parser("plugins", help="list registered plugins and the hooks they implement")
     pl.set_defaults(run=cmd_plugins)
-    nc.add_commands(sub)
+    nc.add_commands(sub)  # the plugins' own commands
     return p
 
 
@@ -230,12 +230,16 @@ def _aligned(
 
 
 def _machine(args: argparse.Namespace) -> tuple:
+    from core.model.machine import resolve_machine
+
     machine = resolve_machine(args.machine)
     note = "" if args.machine else f" [preset {DEFAULT_PRESET}, the default; --machine to choose]"
     return machine, note
 
 
 def _options(args: argparse.Namespace, machine: Machine) -> ExtractOptions:
+    from core.model.toolpath import ExtractOptions
+
     setup = machine.setup
     if args.tool_radius is not None:
         if not (math.isfinite(args.tool_radius) and args.tool_radius >= 0):
@@ -252,6 +256,9 @@ def _print_notices(tp_notices: tuple, stream) -> None:
 
 
 def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
+    from core.cli.report import summary, write_json
+    from core.view.targets import FileTarget
+
     demo = args.demo or args.program is None
     if args.demo and args.program:
         raise UsageError("give a program or --demo, not both")
@@ -274,6 +281,8 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
 
 
 def cmd_profile(args: argparse.Namespace, nc: Ncperf) -> int:
+    from core.cli.report import fmt_time, write_samples
+
     if not (MIN_DT <= args.dt <= MAX_DT):
         raise UsageError(f"--dt must be {MIN_DT:g} to {MAX_DT:g} s, got {args.dt:g}")
     check_outputs((args.csv,), (args.program, args.machine))
@@ -302,6 +311,12 @@ def cmd_profile(args: argparse.Namespace, nc: Ncperf) -> int:
 
 
 def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
+    from core.cli.compare import ranked
+    from core.cli.compare import row as compare_row
+    from core.cli.compare import table as compare_table
+    from core.cli.report import fmt_time
+    from core.view.targets import ComparisonTarget
+
     if len(args.programs) < 2:
         raise UsageError("compare needs two or more programs")
     check_outputs((args.svg,), (*args.programs, args.machine))
@@ -427,11 +442,12 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
     return 0
 
 
-def cmd_machines(_: argparse.Namespace, nc: Ncperf) -> int:
+def cmd_machines(_: argparse.Namespace, nc: Ncperf | None) -> int:
+    from core.model.preset_files import preset_names, preset_title
+
     for name in preset_names():
-        m = load_preset(name)
         default = "  (default)" if name == DEFAULT_PRESET else ""
-        print(f"{name}\t{m.name}{default}")
+        print(f"{name}\t{preset_title(name)}{default}")
     return 0
 
 
@@ -472,13 +488,19 @@ def main(argv: list[str] | None = None) -> int:
 
 
 def _main(argv: list[str] | None) -> int:
+    from core.facade import Ncperf
+    from core.plugins import command_plugin_manager, complete_plugin_manager
+
     try:
-        nc = Ncperf()
+        # The parser needs only the plugins that add commands; the others (and numpy) are
+        # loaded once a command that uses them is chosen (--help, machines: never).
+        nc = Ncperf(command_plugin_manager())
+        args = _parser(nc).parse_args(argv)
+        if getattr(args, "plugins", True):
+            nc = Ncperf(complete_plugin_manager(nc.pm))
     except NcperfError as exc:
         print(f"ncperf: {exc}", file=sys.stderr)
         return 2
-    parser = _parser(nc)
-    args = parser.parse_args(argv)
     try:
         with transaction():  # a failure leaves none of the run's outputs behind
             return int(args.run(args, nc))

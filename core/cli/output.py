@@ -19,7 +19,6 @@ import contextlib
 import contextvars
 import os
 import stat
-import tempfile
 from collections.abc import Iterable, Iterator
 from pathlib import Path
 from typing import IO, Any
@@ -123,6 +122,8 @@ def atomic_writer(path: str | os.PathLike[str], *, binary: bool = False) -> Iter
     target = Path(path)
     check_target(target)
     folder = target.parent if str(target.parent) else Path(".")
+    import tempfile  # here, not at import: ncperf --help does not pay for it
+
     try:
         fd, tmp = tempfile.mkstemp(prefix=f".{target.name}.", suffix=".part", dir=folder)
     except OSError as exc:

@@ -55,7 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import Evaluation
-from core.model.tolerances import TOL
+from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
 
 #: Most rounds of the jerk (effective acceleration) iteration, and when to stop early: the
@@ -63,10 +63,6 @@ from core.model.toolpath import PathMode, ToolPath
 #: speed changes, hence a lower A_eff), contracting by about 4 in log per round.
 JERK_ROUNDS = 12
 JERK_CONVERGED = 1e-4
-
-#: Default time step (s) of a sampled profile: 1 ms, the servo cycle of the traces it is
-#: compared with (LinuxCNC, the reference interpreter).
-SAMPLE_DT = 0.001
 
 
 def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:

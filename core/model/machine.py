@@ -42,16 +42,20 @@ import re
 import sys
 import tomllib
 from dataclasses import dataclass, field
-from importlib import resources
 from pathlib import Path
-from typing import Any
-
-import numpy as np
-from numpy.typing import NDArray
+from typing import TYPE_CHECKING, Any
 
 from core.model.errors import InputError, MachineError, UsageError
 from core.model.inputs import read_input_text
+from core.model.preset_files import DEFAULT_PRESET, preset_names, preset_text
 from core.model.setup import PATH_MODES, ControllerSetup, Tool
+
+if TYPE_CHECKING:
+    import numpy as np
+    from numpy.typing import NDArray
+
+# numpy is imported where a Machine is built, not with this module: the presets' names and
+# titles (``ncperf machines``, the parser's help) cost no numpy.
 
 AXES = ("X", "Y", "Z")
 #: Rotary axes a machine file may add (degrees).
@@ -148,6 +152,8 @@ class Machine:
     setup: ControllerSetup = field(default_factory=ControllerSetup)
 
     def __post_init__(self) -> None:
+        import numpy as np
+
         for key in AXIS_KEYS:
             a = np.array(getattr(self, key), dtype=np.float64)
             if a.shape != (3,):
@@ -169,6 +175,8 @@ class Machine:
         source: str = "<memory>",
     ) -> Machine:
         """Build a machine from the paper's units (m/min, m/s^2, m/s^3)."""
+        import numpy as np
+
         return cls(
             name=name,
             max_feed=np.asarray(max_feed_m_min, dtype=float) * AXIS_KEYS["max_feed"],
@@ -184,6 +192,8 @@ class Machine:
     def rapid_speed(self, direction: NDArray[np.float64]) -> NDArray[np.float64]:
         """Path speed (mm/s) of straight moves along unit ``direction`` (n, 3) with every
         axis at most at its max feed: min over axes of Vmax_k / |u_k|."""
+        import numpy as np
+
         with np.errstate(divide="ignore"):
             per_axis = self.max_feed[None, :] / np.abs(direction)
         return np.minimum(per_axis.min(axis=1), self.max_path_feed)
@@ -312,6 +322,8 @@ def _number(value: object, key: str, name: str, source: str, text: str) -> float
 
 def machine_from_toml_text(text: str, source: str) -> Machine:
     """Parse a machine TOML text; every problem is a :class:`MachineError` naming file and line."""
+    import numpy as np
+
     try:
         data = tomllib.loads(text)
     except tomllib.TOMLDecodeError as exc:
@@ -564,31 +576,19 @@ def _read_machine_file(path: str | Path) -> str:
 
 
 # ---------------------------------------------------------------------------- presets
-DEFAULT_PRESET = "siemens-840d"
-
-
-def preset_names() -> list[str]:
-    """Names of the shipped presets (what ``--machine`` takes)."""
-    files = resources.files("core.model") / "presets"
-    return sorted(f.name[: -len(".toml")] for f in files.iterdir() if f.name.endswith(".toml"))
-
-
 def load_preset(name: str) -> Machine:
     """Load a shipped preset by name."""
     names = preset_names()
     if name not in names:
         raise UsageError(f"unknown machine preset '{name}'; presets: {', '.join(names)}")
-    res = resources.files("core.model") / "presets" / f"{name}.toml"
-    return machine_from_toml_text(res.read_text(encoding="utf-8"), f"preset {name}")
+    return machine_from_toml_text(preset_text(name), f"preset {name}")
 
 
 def machine_text(spec: str | None) -> str:
     """The TOML text of a preset name or a machine file (None: the default preset), for
     tools that write a changed copy (``ncperf calibrate``)."""
     if spec is None or spec in preset_names():
-        name = spec or DEFAULT_PRESET
-        res = resources.files("core.model") / "presets" / f"{name}.toml"
-        return res.read_text(encoding="utf-8")
+        return preset_text(spec or DEFAULT_PRESET)
     return _read_machine_file(spec)
 
 

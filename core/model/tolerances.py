@@ -118,3 +118,9 @@ class Tolerances:
 
 
 TOL = Tolerances()
+
+
+#: Default time step (s) of a sampled profile: 1 ms, the servo cycle of the traces it is
+#: compared with (LinuxCNC, the reference interpreter). Here, with no numpy, so that the
+#: command line's parser can show it without importing the engine.
+SAMPLE_DT = 0.001
