@@ -1,18 +1,29 @@
-"""Time and peak memory of ``ncperf analyze PROGRAM --svg OUT``, end to end.
+"""Time and peak memory of ``ncperf analyze``, beside LinuxCNC's own interpreter, in one run.
 
 Not a test: from the repository root (package installed) run
 
-    python benchmarks/bench_analyze.py [--runs 3] [--moves 1000000]
+    python benchmarks/bench_analyze.py [--runs 3] [--scaling 100000,1000000,5000000]
 
-Programs: ``stellabee1.ngc`` (169k lines, LinuxCNC's trajectory-planner test suite, in
-../shared; skipped when absent), the same with a parameter and a G28 (read by the full
-interpreter, which hands the plain lines to the vectorised reader), and a generated zig-zag
-finishing raster of 1,000,000 moves (benchmarks/gen_finishing.py). Each run is a fresh
-``python -m core analyze`` process; wall time is measured around it and peak memory is the
-child's maximum resident set size (os.wait4). A second table splits one in-process run into
-its stages.
+Three tables, all measured in this one run (ratios are what count on a shared VM, whose speed
+changes from day to day):
 
-Target (issue 2): under 5 s and under 1 GB for the 1M-move program on one core.
+1. ``stellabee1.ngc`` (169k lines, LinuxCNC's trajectory-planner test suite, in ../shared;
+   skipped when absent): ``ncperf analyze`` (parse, the three models, the full profile,
+   zones, the summary) and ``rs274 -g PROGRAM OUT`` (LinuxCNC 2.9's C++ interpreter reading
+   the program and writing its canonical calls; installed by scripts/setup_linuxcnc.sh),
+   run in turns, the ratio per turn; median of ``--runs``.
+2. Scaling: generated zig-zag finishing rasters (benchmarks/gen_finishing.py) of 0.1M, 1M
+   and 5M moves, ``ncperf analyze PROGRAM --svg OUT``: wall time, peak resident memory,
+   microseconds and bytes per move (linear growth keeps both columns flat).
+3. Start-up: ``ncperf --help`` and ``ncperf machines`` beside ``python -c pass``.
+
+Every ncperf run is a fresh ``python -m core`` process: wall time around it, peak memory the
+child's maximum resident set size (os.wait4). A last table splits one in-process run of the
+1M raster into its stages.
+
+Bars (issue 13, on this machine, as ratios in one run): stellabee1 at most 0.8 x rs274;
+1M moves with --svg under 2.5 s and 500 MB; 5M under 2 GB, time linear; --help and
+machines under 0.15 s.
 """
 
 from __future__ import annotations
@@ -21,6 +32,7 @@ import argparse
 import datetime
 import os
 import platform
+import shutil
 import statistics
 import subprocess
 import sys
@@ -35,24 +47,21 @@ ROOT = Path(__file__).resolve().parents[1]
 STELLABEE = ROOT.parent / "shared" / "data" / "gcode" / "linuxcnc-tp-tests" / "stellabee1.ngc"
 
 
-def run_ncperf(*args: str) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB) of one ``ncperf ARGS`` process."""
+def run(cmd: list[str]) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB) of one process; its output is thrown away."""
     t0 = time.perf_counter()
     proc = subprocess.Popen(
-        [sys.executable, "-m", "core", *args],
-        stdout=subprocess.DEVNULL,
-        stderr=subprocess.DEVNULL,
+        cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
     )
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t0
     if status != 0:
-        raise SystemExit(f"ncperf {' '.join(args)} failed with status {status}")
+        raise SystemExit(f"{' '.join(cmd)} failed with status {status}")
     return wall, usage.ru_maxrss / 1024.0
 
 
-def run_cli(program: Path, svg: Path) -> tuple[float, float]:
-    """Wall time (s) and peak RSS (MB) of one ``ncperf analyze`` process."""
-    return run_ncperf("analyze", str(program), "--svg", str(svg))
+def ncperf(*args: str) -> list[str]:
+    return [sys.executable, "-m", "core", *args]
 
 
 def stages(program: Path, svg: Path) -> dict[str, float]:
@@ -63,6 +72,8 @@ def stages(program: Path, svg: Path) -> dict[str, float]:
     t = {}
     t0 = time.perf_counter()
     nc = Ncperf()
+    t["plugin manager (imports the plugins)"] = time.perf_counter() - t0
+    t0 = time.perf_counter()
     tp = nc.extract(str(program))
     t["A1 extract (parse)"] = time.perf_counter() - t0
     t0 = time.perf_counter()
@@ -77,57 +88,110 @@ def stages(program: Path, svg: Path) -> dict[str, float]:
     t0 = time.perf_counter()
     nc.display(tp, ann, FileTarget(str(svg)))
     t["A3 display (SVG)"] = time.perf_counter() - t0
-    t["moves"] = tp.n
     return t
+
+
+def versus_rs274(runs: int, tmp: Path) -> None:
+    print("## stellabee1.ngc: ncperf analyze beside LinuxCNC's rs274, in turns")
+    print()
+    rs274 = shutil.which("rs274")
+    if not STELLABEE.exists() or rs274 is None:
+        missing = "../shared" if not STELLABEE.exists() else "rs274 (scripts/setup_linuxcnc.sh)"
+        print(f"skipped: {missing} not found")
+        print()
+        return
+    ours, theirs, ratios, rss = [], [], [], []
+    for _ in range(runs):
+        w_rs, _ = run([rs274, "-g", str(STELLABEE), str(tmp / "canon.out")])
+        w_nc, r_nc = run(ncperf("analyze", str(STELLABEE)))
+        ours.append(w_nc)
+        theirs.append(w_rs)
+        ratios.append(w_nc / w_rs)
+        rss.append(r_nc)
+    print("| run | rs274 -g [s] | ncperf analyze [s] | ratio | ncperf peak RSS [MB] |")
+    print("|---|---|---|---|---|")
+    for k in range(runs):
+        print(f"| {k + 1} | {theirs[k]:.2f} | {ours[k]:.2f} | {ratios[k]:.2f} | {rss[k]:.0f} |")
+    print(
+        f"| median | {statistics.median(theirs):.2f} | {statistics.median(ours):.2f} "
+        f"| {statistics.median(ratios):.2f} | {statistics.median(rss):.0f} |"
+    )
+    print()
+
+
+def scaling(sizes: list[int], runs: int, tmp: Path) -> Path | None:
+    print("## Scaling: generated finishing rasters, ncperf analyze PROGRAM --svg OUT")
+    print()
+    print(
+        "| moves | file [MB] | runs | wall median [s] | peak RSS [MB] | us per move "
+        "| bytes per move (peak) |"
+    )
+    print("|---|---|---|---|---|---|---|")
+    one_million = None
+    for size in sizes:
+        prog = tmp / f"raster_{size}.nc"
+        n = generate(str(prog), size)
+        k = runs if size <= 1_000_000 else 1  # 5M: one run (about half a minute)
+        walls, peaks = [], []
+        for _ in range(k):
+            w, r = run(ncperf("analyze", str(prog), "--svg", str(tmp / "out.svg")))
+            walls.append(w)
+            peaks.append(r)
+        w, r = statistics.median(walls), max(peaks)
+        print(
+            f"| {n:,} | {prog.stat().st_size / 1e6:.0f} | {k} | {w:.2f} | {r:.0f} "
+            f"| {w / n * 1e6:.2f} | {r * 2**20 / n:.0f} |"
+        )
+        if size == 1_000_000:
+            one_million = prog
+        else:
+            prog.unlink()
+    print()
+    return one_million
+
+
+def startup(runs: int) -> None:
+    print(f"## Start-up (median of {runs})")
+    print()
+    print("| command | wall median [s] |")
+    print("|---|---|")
+    for label, cmd in (
+        ("python -c pass (the interpreter alone)", [sys.executable, "-c", "pass"]),
+        ("ncperf --help", ncperf("--help")),
+        ("ncperf machines", ncperf("machines")),
+    ):
+        walls = [run(cmd)[0] for _ in range(runs)]
+        print(f"| `{label}` | {statistics.median(walls):.3f} |")
+    print()
 
 
 def main() -> None:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--runs", type=int, default=3)
-    ap.add_argument("--moves", type=int, default=1_000_000)
+    ap.add_argument(
+        "--scaling",
+        default="100000,1000000,5000000",
+        help="raster sizes in moves, comma separated (default 0.1M, 1M, 5M)",
+    )
     args = ap.parse_args()
-    with tempfile.TemporaryDirectory() as tmp:
-        tmp = Path(tmp)
-        programs = []
-        if STELLABEE.exists():
-            programs.append(("stellabee1.ngc (169k lines)", STELLABEE))
-            # the same program with a parameter at the top and a home return at the end: the
-            # full interpreter reads it, handing its plain runs to the vectorised reader
-            mixed = tmp / "stellabee1_macro_g28.ngc"
-            data = STELLABEE.read_bytes()
-            mixed.write_bytes(b"#<depth> = 1.5\n" + data.replace(b"M2", b"G28\nM2"))
-            programs.append(("stellabee1 + #<depth> and G28 (full interpreter)", mixed))
-        gen = tmp / "finishing.nc"
-        n = generate(str(gen), args.moves)
-        programs.append((f"generated raster ({n:,} moves)", gen))
-        print(
-            f"ncperf analyze PROGRAM --svg OUT, {datetime.date.today()}, "
-            f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
-            f"{os.cpu_count()} cores; best / median of {args.runs} runs"
-        )
-        print()
-        print("| program | moves | wall best [s] | wall median [s] | peak RSS [MB] | SVG [MB] |")
-        print("|---|---|---|---|---|---|")
-        for name, prog in programs:
-            svg = tmp / "out.svg"
-            walls, rss = [], []
-            for _ in range(args.runs):
-                w, r = run_cli(prog, svg)
-                walls.append(w)
-                rss.append(r)
-            st = stages(prog, svg)
-            print(
-                f"| {name} | {st['moves']:,} | {min(walls):.2f} | {statistics.median(walls):.2f} "
-                f"| {max(rss):.0f} | {svg.stat().st_size / 1e6:.1f} |"
-            )
-            programs_stages = st
-        print()
-        print("Stages of the last program, one in-process run:")
-        print()
-        print("| stage | s |")
-        print("|---|---|")
-        for k, v in programs_stages.items():
-            if k != "moves":
+    print(
+        f"ncperf analyze, {datetime.date.today()}, "
+        f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
+        f"{os.cpu_count()} cores"
+    )
+    print()
+    with tempfile.TemporaryDirectory() as tmp_name:
+        tmp = Path(tmp_name)
+        versus_rs274(args.runs, tmp)
+        sizes = [int(s) for s in args.scaling.split(",") if s.strip()]
+        prog = scaling(sizes, args.runs, tmp)
+        startup(max(args.runs, 11))
+        if prog is not None:
+            print("## Stages of one in-process run of the 1M raster")
+            print()
+            print("| stage | s |")
+            print("|---|---|")
+            for k, v in stages(prog, tmp / "out.svg").items():
                 print(f"| {k} | {v:.2f} |")
 
 

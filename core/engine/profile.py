@@ -456,23 +456,36 @@ def _holds(ev: Evaluation) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     return np.minimum(h_start, half), np.minimum(h_end, half), r_start, r_end
 
 
-def _passes(
-    b: NDArray, length: NDArray, a_up: NDArray, a_dn: NDArray, h_start: NDArray, h_end: NDArray
-) -> NDArray:
+def _passes(b: NDArray, inner: NDArray, a_up: NDArray, a_dn: NDArray) -> NDArray:
     """Boundary speeds (n + 1,) from the forward and backward passes (see module docstring).
 
     The machine changes speed only between the holds at the ends of each move (the inserted
-    arc of a corner, a curvature transition): the passes use the length left between them.
-    At a boundary whose cap does not bind, the hold then runs at the boundary's speed, which
-    is slightly conservative.
+    arc of a corner, a curvature transition): the passes use the length left between them,
+    ``inner`` = max(length - holds, 0). At a boundary whose cap does not bind, the hold then
+    runs at the boundary's speed, which is slightly conservative. (Written with ``out=``:
+    the same operations in the same order, without a temporary per step.)
     """
-    inner = np.maximum(length - h_start - h_end, 0.0)
-    w_up = np.concatenate([[0.0], np.cumsum(2.0 * a_up * inner)])
-    w_dn = np.concatenate([[0.0], np.cumsum(2.0 * a_dn * inner)])
+    n1 = b.size
     b2 = b * b
-    fwd = np.minimum.accumulate(b2 - w_up) + w_up
-    bwd = np.minimum.accumulate((b2 + w_dn)[::-1])[::-1] - w_dn
-    return np.sqrt(np.maximum(np.minimum(np.minimum(fwd, bwd), b2), 0.0))
+    w = np.empty(n1)
+    w[0] = 0.0
+    tmp = np.multiply(a_up, inner)
+    tmp *= 2.0
+    np.cumsum(tmp, out=w[1:])
+    fwd = np.subtract(b2, w)
+    np.minimum.accumulate(fwd, out=fwd)
+    fwd += w
+    np.multiply(a_dn, inner, out=tmp)
+    tmp *= 2.0
+    np.cumsum(tmp, out=w[1:])
+    bwd = np.add(b2, w)
+    rev = bwd[::-1]
+    np.minimum.accumulate(rev, out=rev)
+    bwd -= w
+    np.minimum(fwd, bwd, out=fwd)
+    np.minimum(fwd, b2, out=fwd)
+    np.maximum(fwd, 0.0, out=fwd)
+    return np.sqrt(fwd, out=fwd)
 
 
 def stop_speed(dist: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
@@ -508,35 +521,74 @@ def _window_caps(
     return np.minimum(b, stop_speed(s[ahead] - s, acc[k], jerk[k]))
 
 
-def _moves(
-    v: NDArray,
-    length: NDArray,
-    cap: NDArray,
-    a_up: NDArray,
-    a_dn: NDArray,
-    h_start: NDArray,
-    h_end: NDArray,
-    r_start: NDArray,
-    r_end: NDArray,
-):
+class _Holds:
+    """The holds of every move, what the rounds of :func:`build_profile` reuse: the length
+    left between them (``between``, may be < 0; ``inner`` = max(between, 0)) and where they
+    are (most moves have none: their hold time is computed where they are only)."""
+
+    def __init__(self, length, h_start, h_end, r_start, r_end) -> None:
+        self.between = length - h_start - h_end
+        self.inner = np.maximum(self.between, 0.0)
+        self.at_start = np.flatnonzero(h_start > 0)
+        self.at_end = np.flatnonzero(h_end > 0)
+        self.run_start = (r_start * h_start)[self.at_start]
+        self.run_end = (r_end * h_end)[self.at_end]
+
+    def time(self, v0: NDArray, v1: NDArray) -> NDArray:
+        """(n,) time of the holds at entry speed ``v0`` and exit speed ``v1`` (0 where a
+        hold would run at speed 0: a stop there is the ramps' business)."""
+        t = np.zeros(v0.size)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ts = self.run_start / v0[self.at_start]
+            te = self.run_end / v1[self.at_end]
+        # run >= 0 and v >= 0: a quotient is finite, +inf (v = 0) or NaN (0 / 0), both 0
+        ts[~(ts < np.inf)] = 0.0
+        te[~(te < np.inf)] = 0.0
+        t[self.at_start] = ts
+        t[self.at_end] += te
+        return t
+
+
+def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds):
     """Entry, peak, exit speed and time of every move from its boundary speeds; the holds
-    at its ends run at the entry and exit speed (over ``r * h`` of actual travel)."""
+    at its ends run at the entry and exit speed (over ``r * h`` of actual travel).
+    (Written with ``out=``: the same operations in the same order, fewer temporaries.)"""
     v0, v1 = v[:-1], v[1:]
+    t_hold = holds.time(v0, v1)
+    length = holds.between
+    v0sq = v0 * v0  # v**2 of a float64 array is v * v
+    v1sq = v1 * v1
     with np.errstate(divide="ignore", invalid="ignore"):
-        t_hold = np.nan_to_num(
-            np.where(h_start > 0, r_start * h_start / v0, 0.0), posinf=0.0
-        ) + np.nan_to_num(np.where(h_end > 0, r_end * h_end / v1, 0.0), posinf=0.0)
-    length = length - h_start - h_end
-    with np.errstate(divide="ignore", invalid="ignore"):
-        peak2 = (2.0 * length + v0**2 / a_up + v1**2 / a_dn) / (1.0 / a_up + 1.0 / a_dn)
-    peak = np.minimum(cap, np.sqrt(np.maximum(peak2, 0.0)))
-    peak = np.maximum(peak, np.maximum(v0, v1))
-    t_up = (peak - v0) / a_up
-    t_dn = (peak - v1) / a_dn
-    d_cr = np.maximum(length - (peak**2 - v0**2) / (2 * a_up) - (peak**2 - v1**2) / (2 * a_dn), 0.0)
+        # peak2 = (2 L + v0^2 / a_up + v1^2 / a_dn) / (1 / a_up + 1 / a_dn)
+        peak = 2.0 * length
+        peak += v0sq / a_up
+        peak += v1sq / a_dn
+        den = 1.0 / a_up
+        den += 1.0 / a_dn
+        peak /= den
+    np.maximum(peak, 0.0, out=peak)
+    np.sqrt(peak, out=peak)
+    np.minimum(cap, peak, out=peak)
+    np.maximum(peak, np.maximum(v0, v1), out=peak)
+    t = peak - v0
+    t /= a_up  # t_up
+    t_dn = peak - v1
+    t_dn /= a_dn
+    pk2 = peak * peak
+    # d_cr = max(L - (peak^2 - v0^2) / (2 a_up) - (peak^2 - v1^2) / (2 a_dn), 0)
+    up = pk2 - v0sq
+    up /= 2 * a_up
+    d_cr = length - up
+    np.subtract(pk2, v1sq, out=up)
+    up /= 2 * a_dn
+    d_cr -= up
+    np.maximum(d_cr, 0.0, out=d_cr)
     with np.errstate(divide="ignore", invalid="ignore"):
         t_cr = np.where(peak > 0, d_cr / peak, 0.0)
-    return v0, peak, v1, t_up + t_cr + t_dn + t_hold, d_cr
+    t += t_cr
+    t += t_dn
+    t += t_hold
+    return v0, peak, v1, t, d_cr
 
 
 def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, NDArray]:
@@ -565,12 +617,10 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, N
     idx = np.flatnonzero(phase)
     if idx.size == 0:
         return phase, np.zeros(n), np.zeros(n)
-    c = cid[idx]
-    n_c = int(c.max()) + 1
-    first = np.full(n_c, n, dtype=np.int64)
-    last = np.full(n_c, -1, dtype=np.int64)
-    np.minimum.at(first, c, idx)
-    np.maximum.at(last, c, idx)
+    c = cid[idx]  # non-decreasing; every chain has its start move in ``idx``
+    edge = c[1:] != c[:-1]
+    first = idx[np.concatenate([[True], edge])]
+    last = idx[np.concatenate([edge, [True]])]
     if rising:
         lo = v0[first]
         hi = np.where(through[last], v1[last], peak[last])
@@ -582,6 +632,15 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, N
     low = np.zeros(n)
     low[idx] = lo[c]
     return phase, dv, low
+
+
+def _ramp_acceleration(phase: NDArray, dv: NDArray, acc: NDArray, jerk: NDArray) -> NDArray:
+    """``acc`` with the effective acceleration of its ramp on every move in a ramp phase
+    (computed on those moves only: on long programs most moves cruise)."""
+    out = acc.copy()
+    idx = np.flatnonzero(phase)
+    out[idx] = effective_acceleration(dv[idx], acc[idx], jerk[idx])
+    return out
 
 
 def _damped(a: NDArray, new: NDArray, last: NDArray) -> tuple[NDArray, NDArray]:
@@ -634,22 +693,20 @@ def build_profile(
     b = boundary_caps(ev, cap, pause)
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
+    holds = _Holds(length, h_start, h_end, r_start, r_end)
+    caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
     a_up, a_dn = acc.copy(), acc.copy()
     step_up = np.zeros(tp.n)
     step_dn = np.zeros(tp.n)
     for r in range(max(rounds, 1)):
-        v = _passes(
-            _window_caps(b, length, acc, jerk, lookahead), length, a_up, a_dn, h_start, h_end
-        )
-        v0, peak, v1, time, d_cr = _moves(
-            v, length, cap, a_up, a_dn, h_start, h_end, r_start, r_end
-        )
+        v = _passes(caps, holds.inner, a_up, a_dn)
+        v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
         if r == rounds - 1 or not np.isfinite(jerk).any():
             break
         up, dv_up, _ = _ramp_changes(v0, peak, v1, d_cr, rising=True)
         dn, dv_dn, _ = _ramp_changes(v0, peak, v1, d_cr, rising=False)
-        new_up = np.where(up, effective_acceleration(dv_up, acc, jerk), acc)
-        new_dn = np.where(dn, effective_acceleration(dv_dn, acc, jerk), acc)
+        new_up = _ramp_acceleration(up, dv_up, acc, jerk)
+        new_dn = _ramp_acceleration(dn, dv_dn, acc, jerk)
         # Where a move's A_eff turns back (a staircase of falling caps: small steps give a low
         # A_eff, which holds the speed under the caps, which gives one long ramp and a high
         # A_eff, ...), take the geometric mean of the last two: the rounds then close in on
@@ -663,12 +720,8 @@ def build_profile(
             )
         a_up, a_dn = new_up, new_dn
         if change < JERK_CONVERGED:
-            v = _passes(
-                _window_caps(b, length, acc, jerk, lookahead), length, a_up, a_dn, h_start, h_end
-            )
-            v0, peak, v1, time, d_cr = _moves(
-                v, length, cap, a_up, a_dn, h_start, h_end, r_start, r_end
-            )
+            v = _passes(caps, holds.inner, a_up, a_dn)
+            v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
             break
     if np.isfinite(jerk).any():
         _, dv_up, lo_up = _ramp_changes(v0, peak, v1, d_cr, rising=True)
