@@ -7,7 +7,7 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import TYPE_CHECKING
 
 from core.model.errors import Notice, UsageError
@@ -162,13 +162,14 @@ class Ncperf:
         base: Setup,
         baseline: str,
         effects: Mapping[str, Effect],
+        progress: Callable[[str], None] | None = None,
     ) -> Diagnosis:
         """The diagnosis of programs against their aligned traces (each case: a tool path,
         its alignments and their labels), on one machine (``base``), with these effects
         (see :mod:`core.diagnosis.diagnose`)."""
         from core.diagnosis.diagnose import diagnose_cases  # only the diagnosis pays for it
 
-        return diagnose_cases(self.indicators, cases, base, baseline, effects)
+        return diagnose_cases(self.indicators, cases, base, baseline, effects, progress)
 
     def calibrate(
         self,

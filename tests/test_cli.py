@@ -215,3 +215,29 @@ def test_compare_needs_two_programs(program):
     """One program is not a comparison: a usage error."""
     r = run("compare", program)
     assert r.returncode == 2 and "two or more" in r.stderr
+
+
+def test_progress_line_on_a_terminal_only():
+    """A long command's progress: one line a terminal overwrites (escaped text, cleared at the
+    end); nothing at all on a stream that is not a terminal."""
+    import io
+
+    from core.cli.main import _Progress
+
+    class Tty(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    tty, log = Tty(), io.StringIO()
+    for stream in (tty, log):
+        with _Progress("ncperf diagnose", stream) as progress:
+            progress("aligning a\x1b[2Jb.csv")
+            progress("fitting servo_lag (9 of 15 effects)")
+    import re
+
+    out = re.sub(r"\[\d+ s\]", "[T s]", tty.getvalue())  # the seconds since the start
+    assert log.getvalue() == ""
+    assert out.startswith("\rncperf diagnose: aligning a\\x1b[2Jb.csv [T s]")
+    assert "\rncperf diagnose: fitting servo_lag (9 of 15 effects) [T s]" in out
+    assert "\x1b" not in out and "\n" not in out
+    assert out.endswith("\r" + " " * len(out.split("\r")[-3]) + "\r")

@@ -358,9 +358,11 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
         effects = {k: effects[k] for k in wanted}
     tp = nc.extract(args.program, _options(args, machine))
     _print_notices(tp.notices, sys.stderr)
-    alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis")
-    base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
-    d = nc.diagnose([(tp, alignments, labels)], base, args.baseline, effects)
+    with _Progress("ncperf diagnose", sys.stderr) as progress:
+        progress(f"aligning {len(args.traces)} trace(s) on {Path(args.program).name}")
+        alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis")
+        base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
+        d = nc.diagnose([(tp, alignments, labels)], base, args.baseline, effects, progress)
     print(
         report(
             d,
@@ -457,12 +459,51 @@ def cmd_plugins(_: argparse.Namespace, nc: Ncperf) -> int:
     return 0
 
 
+class _Progress:
+    """What a long command is doing, on one line of a terminal that each step overwrites
+    (with the time since the start); nothing when the stream is not a terminal (a log or a
+    pipe gets the report only). As a context manager it clears the line at the end. The
+    step's text goes through :func:`printable`; only the carriage returns are its own."""
+
+    def __init__(self, command: str, stream: Any) -> None:
+        import time
+
+        self._clock = time.monotonic
+        self._t0 = self._clock()
+        self._command = command
+        self._stream = getattr(stream, "raw_stream", stream)  # past _Printable: "\r" stays
+        self._on = bool(getattr(stream, "isatty", lambda: False)())
+        self._width = 0
+
+    def __call__(self, step: str) -> None:
+        if not self._on:
+            return
+        line = printable(f"{self._command}: {step} [{self._clock() - self._t0:.0f} s]")
+        self._stream.write("\r" + line.ljust(self._width))
+        self._stream.flush()
+        self._width = len(line)
+
+    def __enter__(self) -> _Progress:
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        if self._on and self._width:
+            self._stream.write("\r" + " " * self._width + "\r")
+            self._stream.flush()
+            self._width = 0
+
+
 class _Printable(io.TextIOBase):
     """A terminal stream that shows every control character from an input as an escape
     (:func:`printable`): whatever reaches the terminal, from any report, cannot act on it."""
 
     def __init__(self, stream: Any) -> None:
         self._stream = stream
+
+    @property
+    def raw_stream(self) -> Any:
+        """The terminal itself, for a writer that escapes its own text (:class:`_Progress`)."""
+        return self._stream
 
     def write(self, s: str) -> int:
         self._stream.write(printable(s, lines=True))

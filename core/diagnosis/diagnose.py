@@ -30,7 +30,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
@@ -187,9 +187,12 @@ def diagnose_cases(
     base: Setup,
     baseline: str,
     effects: Mapping[str, Effect],
+    progress: Callable[[str], None] | None = None,
 ) -> Diagnosis:
     """The diagnosis of several programs, each with its aligned traces, on one machine:
-    effects are fitted on some traces and measured on the others (see the module docstring)."""
+    effects are fitted on some traces and measured on the others (see the module docstring).
+    ``progress``, if given, is told what is being done (one short line per step)."""
+    say = progress or (lambda _: None)
     tps = [tp for tp, _, _ in cases]
     data = [
         resample(tp, al, lab, case=k)
@@ -202,7 +205,8 @@ def diagnose_cases(
     g_before = gap(before, data, "held_out")
     results = []
     fitted: dict[str, tuple[dict[str, float], list[Prediction]]] = {}
-    for name, eff in effects.items():
+    for k, (name, eff) in enumerate(effects.items(), start=1):
+        say(f"fitting {name} ({k} of {len(effects)} effects)")
         params, preds = fit(indicators_of, tps, base, eff, data)
         fitted[name] = (params, preds)
         results.append(
@@ -248,6 +252,7 @@ def diagnose_cases(
             share=ADD_SHARE,
             most=MAX_CHOSEN - 1,
             stop=STOP_SHARE * g_before,
+            progress=progress,
         )
         for name, params, _, _ in added:
             chosen.append(name)
@@ -299,6 +304,7 @@ def add_effects(
     share: float,
     most: int,
     stop: float = 0.0,
+    progress: Callable[[str], None] | None = None,
 ) -> tuple[list[tuple[str, dict[str, float], float, float]], Setup, list[Prediction]]:
     """Forward selection on top of ``current`` (whose predictions are ``preds``): every
     effect not yet added is fitted on the calibration data, and the one leaving the least
@@ -313,6 +319,8 @@ def add_effects(
         for name, eff in effects.items():
             if any(a[0] == name for a in added):
                 continue
+            if progress is not None:
+                progress(f"combining effects: fitting {name} on top of the chosen ones")
             params, p = fit(indicators_of, tps, current, eff, data)
             trials.append((gap(p, data, "held_out"), name, params, p))
         if not trials:
