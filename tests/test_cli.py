@@ -232,12 +232,16 @@ def test_progress_line_on_a_terminal_only():
     for stream in (tty, log):
         with _Progress("ncperf diagnose", stream) as progress:
             progress("aligning a\x1b[2Jb.csv")
+            progress.clear()  # a warning follows on a line of its own
+            stream.write("b.csv:3: warning\n")
             progress("fitting servo_lag (9 of 15 effects)")
     import re
 
     out = re.sub(r"\[\d+ s\]", "[T s]", tty.getvalue())  # the seconds since the start
-    assert log.getvalue() == ""
+    assert log.getvalue() == "b.csv:3: warning\n"
+    first = "ncperf diagnose: aligning a\\x1b[2Jb.csv [T s]"
+    assert "\r" + " " * len(first) + "\rb.csv:3: warning\n" in out  # blanked, then the warning
     assert out.startswith("\rncperf diagnose: aligning a\\x1b[2Jb.csv [T s]")
     assert "\rncperf diagnose: fitting servo_lag (9 of 15 effects) [T s]" in out
-    assert "\x1b" not in out and "\n" not in out
+    assert "\x1b" not in out and out.count("\n") == 1
     assert out.endswith("\r" + " " * len(out.split("\r")[-3]) + "\r")

@@ -209,10 +209,16 @@ def _wanted(spec: str | None, known: list[str], unknown_message: str) -> list[st
 
 
 def _aligned(
-    nc: Ncperf, tp: ToolPath, paths: list[str], args: argparse.Namespace, purpose: str
+    nc: Ncperf,
+    tp: ToolPath,
+    paths: list[str],
+    args: argparse.Namespace,
+    purpose: str,
+    progress: _Progress | None = None,
 ) -> tuple[list, list[str]]:
-    """Each trace read (its warnings printed) and aligned on ``tp``, and its label; a trace
-    that does not align is an error ending "no ``purpose``"."""
+    """Each trace read (its warnings printed, below a ``progress`` line if one is up) and
+    aligned on ``tp``, and its label; a trace that does not align is an error ending "no
+    ``purpose``"."""
     from core.diagnosis.align import align
     from core.model.trace import TraceOptions
 
@@ -220,6 +226,8 @@ def _aligned(
     alignments, labels = [], []
     for path in paths:
         tr = nc.read_trace(path, options)
+        if progress is not None and tr.notices:
+            progress.clear()  # the warnings start on a line of their own
         _print_notices(tr.notices, sys.stderr)
         al = align(tp, tr)
         if not al.ok:
@@ -360,7 +368,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     _print_notices(tp.notices, sys.stderr)
     with _Progress("ncperf diagnose", sys.stderr) as progress:
         progress(f"aligning {len(args.traces)} trace(s) on {Path(args.program).name}")
-        alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis")
+        alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis", progress)
         base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
         d = nc.diagnose([(tp, alignments, labels)], base, args.baseline, effects, progress)
     print(
@@ -487,6 +495,10 @@ class _Progress:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        self.clear()
+
+    def clear(self) -> None:
+        """Blank the line (before other output; the next step writes it again)."""
         if self._on and self._width:
             self._stream.write("\r" + " " * self._width + "\r")
             self._stream.flush()
