@@ -64,6 +64,12 @@ def ncperf(*args: str) -> list[str]:
     return [sys.executable, "-m", "core", *args]
 
 
+def run_ncperf(*args: str) -> tuple[float, float]:
+    """Wall time (s) and peak RSS (MB) of one ``ncperf ARGS`` process (bench_diagnose.py
+    times its runs with it too)."""
+    return run(ncperf(*args))
+
+
 def stages(program: Path, svg: Path) -> dict[str, float]:
     """Seconds per stage of one in-process run."""
     from core import FileTarget, Ncperf, build_annotations, load_preset
@@ -103,7 +109,7 @@ def versus_rs274(runs: int, tmp: Path) -> None:
     ours, theirs, ratios, rss = [], [], [], []
     for _ in range(runs):
         w_rs, _ = run([rs274, "-g", str(STELLABEE), str(tmp / "canon.out")])
-        w_nc, r_nc = run(ncperf("analyze", str(STELLABEE)))
+        w_nc, r_nc = run_ncperf("analyze", str(STELLABEE))
         ours.append(w_nc)
         theirs.append(w_rs)
         ratios.append(w_nc / w_rs)
@@ -134,7 +140,7 @@ def scaling(sizes: list[int], runs: int, tmp: Path) -> Path | None:
         k = runs if size <= 1_000_000 else 1  # 5M: one run (about half a minute)
         walls, peaks = [], []
         for _ in range(k):
-            w, r = run(ncperf("analyze", str(prog), "--svg", str(tmp / "out.svg")))
+            w, r = run_ncperf("analyze", str(prog), "--svg", str(tmp / "out.svg"))
             walls.append(w)
             peaks.append(r)
         w, r = statistics.median(walls), max(peaks)

@@ -12,6 +12,7 @@ import io
 import math
 import os
 import sys
+import time
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -474,10 +475,7 @@ class _Progress:
     step's text goes through :func:`printable`; only the carriage returns are its own."""
 
     def __init__(self, command: str, stream: Any) -> None:
-        import time
-
-        self._clock = time.monotonic
-        self._t0 = self._clock()
+        self._t0 = time.monotonic()
         self._command = command
         self._stream = getattr(stream, "raw_stream", stream)  # past _Printable: "\r" stays
         self._on = bool(getattr(stream, "isatty", lambda: False)())
@@ -486,7 +484,7 @@ class _Progress:
     def __call__(self, step: str) -> None:
         if not self._on:
             return
-        line = printable(f"{self._command}: {step} [{self._clock() - self._t0:.0f} s]")
+        line = printable(f"{self._command}: {step} [{time.monotonic() - self._t0:.0f} s]")
         self._stream.write("\r" + line.ljust(self._width))
         self._stream.flush()
         self._width = len(line)
