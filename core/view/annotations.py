@@ -65,6 +65,13 @@ class Annotations:
     length_labels, length_colours : tuple of str
         The three length classes.
     rapid_colour : str
+    speed_share : (n,) float32 or None
+        Mean predicted speed of each move over its programmed feed, from the feed profile
+        (length / predicted time / F, 0..1): where the time goes. NaN for rapids; None when
+        no profile was given (a diagnosis colours by its gap instead).
+    speed_class : (n,) int8 or None
+        Reduction class 0..5 of ``1 - speed_share`` (the classes of ``move_class``); -1 for
+        rapids. The displays colour by it by default.
     """
 
     title: str
@@ -86,6 +93,8 @@ class Annotations:
     length_labels: tuple[str, ...] = LENGTH_LABELS
     length_colours: tuple[str, ...] = LENGTH_COLOURS
     rapid_colour: str = RAPID_COLOUR
+    speed_share: NDArray[np.float32] | None = None
+    speed_class: NDArray[np.int8] | None = None
 
 
 def length_class(ev: Evaluation) -> NDArray[np.int8]:
@@ -98,6 +107,15 @@ def length_class(ev: Evaluation) -> NDArray[np.int8]:
     return np.where(tp.is_feed, cls, -1).astype(np.int8)
 
 
+def speed_share(profile: Profile) -> NDArray[np.float64]:
+    """(n,) mean predicted speed of each move over its programmed feed (length / time / F);
+    NaN for rapids. A move the profile runs at F has share 1."""
+    tp = profile.toolpath
+    with np.errstate(invalid="ignore", divide="ignore"):
+        share = tp.length / (profile.time * tp.feed)
+    return np.where(tp.is_feed, np.minimum(share, 1.0), np.nan)
+
+
 def build_annotations(
     ev: Evaluation, profile: Profile | None = None, *, zones: int = 10
 ) -> Annotations:
@@ -106,6 +124,8 @@ def build_annotations(
     if profile is None:
         profile = build_profile(ev)
     mc = np.where(tp.is_feed, reduction_class(np.nan_to_num(ev.element_reduction)), -1)
+    share = speed_share(profile)
+    sc = np.where(tp.is_feed, reduction_class(1.0 - np.nan_to_num(share, nan=1.0)), -1)
     counts = []
     for k in range(len(ev.indicator_names)):
         nj = int(np.count_nonzero((ev.junction_indicator == k) & (ev.junction_limit != 0)))
@@ -126,4 +146,6 @@ def build_annotations(
         indicator_names=ev.indicator_names,
         indicator_counts=tuple(counts),
         labels=ev.labels,
+        speed_share=share.astype(np.float32),
+        speed_class=sc.astype(np.int8),
     )
