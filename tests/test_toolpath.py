@@ -126,6 +126,44 @@ def test_zones_merge_close_corners_and_rank_by_time_lost(models):
     assert pair.cause.startswith("tangential: acceleration")
 
 
+def test_zones_of_lone_corners_keep_fractions(models):
+    """A path whose every zone is a lone corner (no move wholly below 0.9 F) still reports
+    the time and length each zone loses to the fraction: the sums start as floats."""
+    # Issue 14: on the Fig. 1 polygons every zone said "lost 0.000 s" with whole-mm lengths
+    # (a bincount over no inner moves gave integers that np.add.at then truncated).
+    # Two 10 mm lines, one 90 deg corner, F 100 mm/s, A 2500 mm/s^2, no jerk limit: as in
+    # the test above, 2 ((F - v)^2 / (2 A F) + (R pi / 4) / v - R / F) = 0.0384245 s over
+    # 2 ((F^2 - v^2) / (2 A) + R) = 4.024142 mm.
+    inf = float("inf")
+    tp = path([{"end": (10, 0, 0)}, {"end": (10, 10, 0)}], feed=100.0)
+    ev = models.evaluate(tp, machine(jerk=(inf, inf, inf), t_int=0.001))
+    (zone,) = find_zones(ev, build_profile(ev))
+    F, A, R = 100.0, 2500.0, 0.0241421356237
+    v = math.sqrt(A * R)
+    lost = 2 * ((F - v) ** 2 / (2 * A * F) + (R * math.pi / 4) / v - R / F)
+    assert lost == pytest.approx(0.0384245, rel=1e-5)
+    assert zone.time_lost == pytest.approx(lost, rel=1e-9)
+    assert zone.length == pytest.approx(2 * ((F**2 - v**2) / (2 * A) + R), rel=1e-9)
+
+
+def test_fig1_polygon_zones_lose_time():
+    """On the bundled Fig. 1 polygons, every listed zone loses a positive time and the
+    terminal report prints it (the zones there are lone corners: issue 14's 0.000 s)."""
+    import contextlib
+    import io
+    from pathlib import Path
+
+    from core.cli.main import main
+
+    prog = Path(__file__).resolve().parents[1] / "examples" / "fig1_polygons_F2000.ngc"
+    out = io.StringIO()
+    with contextlib.redirect_stdout(out):
+        assert main(["analyze", str(prog), "--machine", "siemens-840d"]) == 0
+    rows = [r for r in out.getvalue().splitlines() if " s  tangential: " in r]
+    assert len(rows) >= 4, out.getvalue()
+    assert all(" 0.000 s " not in r for r in rows), "\n".join(rows)
+
+
 def test_annotations_classes():
     """Move classes from each block's own reduction; junction classes from theirs."""
     from core import Ncperf, make_plugin_manager

@@ -120,8 +120,12 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     # Zone of each move: zone m lies between break m-1 and break m.
     zone_of = np.searchsorted(brk, np.arange(tp.n), side="left")
     inner = ~fast
+    # float64 whatever the count: a bincount over no moves is int64, and np.add.at below
+    # would truncate every lone corner's fractions into it
     lost = np.bincount(zone_of[inner], weights=profile.lost_time[inner], minlength=n_z)
+    lost = lost.astype(np.float64, copy=False)
     length = np.bincount(zone_of[inner], weights=tp.length[inner], minlength=n_z)
+    length = length.astype(np.float64, copy=False)
     # Breaks: their accelerating start ends zone m, their braking end opens zone m + 1.
     m = np.arange(brk.size)
     np.add.at(lost, m, lost_up[brk])
