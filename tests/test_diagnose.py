@@ -385,3 +385,63 @@ def test_diagnose_refuses_a_trace_of_another_program(tmp_path):
     assert r.returncode == 1 and "Traceback" not in r.stderr
     assert last.startswith(f"{csv}: LOW ALIGNMENT QUALITY")
     assert not (tmp_path / "o.json").exists()
+
+
+def test_a_fit_at_its_bound_warns_that_the_machine_file_is_wrong(nc):
+    """A machine three times slower than its file (feed override 0.3) diagnosed with the feed
+    override alone, whose scale stops at 0.5: the fit runs to 0.5 and the report warns that
+    the machine file may be wrong (issue 14) instead of only suggesting scale = 0.5."""
+    from core.cli.diagnosis_report import report, to_json
+
+    tp = zigzag()
+    m = machine(jerk=(INF, INF, INF))
+    effects = {"feed_override": nc.effects()["feed_override"]}
+    base = Setup(machine=m)
+    eff = effects["feed_override"]
+    tr = synthetic_trace(nc, tp, eff.apply(base, eff.defaults(m) | {"scale": 0.3}))
+    d = nc.diagnose([(tp, [align(tp, tr)], ["run1.csv"])], base, "profile", effects)
+    assert d.effects[0].params["scale"] == pytest.approx(0.5, abs=0.005)
+    text = report(d, program="p.ngc", machine="m", labels=["run1.csv"], effects=effects)
+    assert "feed_override fitted scale=0.5, at its bound (0.5 to 1.5)" in text
+    assert "run ncperf calibrate" in text
+    assert any("at its bound" in w for w in to_json(d, m, effects)["warnings"])
+
+
+def test_a_fit_inside_its_bounds_has_no_warning(nc):
+    """An override of 0.8, inside 0.5-1.5: named, and no warning."""
+    from core.cli.diagnosis_report import at_bound, report
+
+    tp = zigzag()
+    m = machine(jerk=(INF, INF, INF))
+    effects = {"feed_override": nc.effects()["feed_override"]}
+    base = Setup(machine=m)
+    eff = effects["feed_override"]
+    tr = synthetic_trace(nc, tp, eff.apply(base, eff.defaults(m) | {"scale": 0.8}))
+    d = nc.diagnose([(tp, [align(tp, tr)], ["run1.csv"])], base, "profile", effects)
+    text = report(d, program="p.ngc", machine="m", labels=["run1.csv"], effects=effects)
+    assert "WARNING" not in text
+    # log parameters are judged in log space: of 0.25-4, 3.9 is ln(3.9 / 0.25) / ln 16 =
+    # 0.9909 of the way (at the bound: the zone starts at 0.99), 3.8 is 0.9814 (not)
+    js = next(p for p in nc.effects()["axis_dynamics"].params if p.name == "jerk_scale")
+    got = [at_bound(js, v) for v in (4.0, 3.9, 3.8, 1.0, 0.25)]
+    assert got == [True, True, False, False, True]
+    # a bound that is the value changing nothing (a lag of 0 s) is not a stretched fit
+    tau = nc.effects()["servo_lag"].params[0]
+    assert not at_bound(tau, 0.0, default=0.0) and at_bound(tau, 0.2, default=0.0)
+
+
+def test_the_reason_for_naming_nothing_quotes_the_thresholds_used():
+    """An effect removing 71 % of a 1.0 mm/min gap (0.71 mm/min) under a floor of 0.96 mm/min
+    is not named, and the reason says so with the floor's value -- not a share it passed
+    (issue 14: the report said "no effect removes 20 %" under a table showing 71 %)."""
+    from core.diagnosis.diagnose import EffectResult, decide
+
+    r = EffectResult("servo_lag", {"tau": 0.01}, 1.0, 0.29, 0.3, moved=1, p=0.001)
+    _, best, reason = decide([r], floor=0.96)
+    assert best is None
+    assert reason == ("none: the best fit, servo_lag, removes 0.7 mm/min (< the floor 1.0 mm/min)")
+    # above the floor, but a lucky stretch (p 0.2) and under 3 x the floor: not significant
+    r = EffectResult("servo_lag", {"tau": 0.01}, 10.0, 8.0, 8.0, moved=1, p=0.2)
+    _, best, reason = decide([r], floor=1.0)
+    assert best is None
+    assert reason.endswith("is not significant over the held-out pieces (p = 0.2 > 0.01)")

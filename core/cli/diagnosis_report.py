@@ -6,12 +6,13 @@ Gaps in mm/min, times in s; the thresholds quoted come from :mod:`core.diagnosis
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from core.diagnosis.diagnose import Diagnosis
 from core.diagnosis.gaps import GapZone
-from core.diagnosis.rules import ADD_SHARE, BEST_SHARE, GAP_SHARE, SIG_P, STOP_SHARE
-from core.engine.effects import Effect
+from core.diagnosis.rules import ADD_SHARE, AT_BOUND, BEST_SHARE, GAP_SHARE, SIG_P, STOP_SHARE
+from core.engine.effects import Effect, Param
 from core.model.machine import Machine
 
 
@@ -23,6 +24,58 @@ def _fmt_params(params: dict[str, float], eff: Effect) -> str:
         )
         or "-"
     )
+
+
+def at_bound(p: Param, value: float, default: float | None = None) -> bool:
+    """Whether a fitted value sits at one of the parameter's bounds (within AT_BOUND of its
+    range; in log space for log parameters). A bound that is the parameter's ``default``
+    (the value that changes nothing, e.g. a lag of 0 s) is where an unused part of the
+    effect rests, not a stretched fit."""
+
+    def pos(x: float) -> float:
+        if p.log and p.low > 0 and x > 0:
+            return (math.log(x) - math.log(p.low)) / (math.log(p.high) - math.log(p.low))
+        return (x - p.low) / (p.high - p.low)
+
+    if not (math.isfinite(p.high - p.low) and p.high > p.low):
+        return False
+    at_low, at_high = pos(value) <= AT_BOUND, pos(value) >= 1.0 - AT_BOUND
+    if default is not None:
+        at_low &= pos(default) > AT_BOUND
+        at_high &= pos(default) < 1.0 - AT_BOUND
+    return bool(at_low or at_high)
+
+
+def warnings(d: Diagnosis, effects: Mapping[str, Effect], labels: list[str]) -> list[str]:
+    """What makes the diagnosis doubtful: a trace poorly aligned on the program, or a
+    suggested (or leading) effect whose fit ran to a bound of its parameters -- both the
+    signs of a machine file that does not describe the machine."""
+    out = [
+        f"the trace {lab} is poorly aligned on the program ({al.message})"
+        for lab, al in zip(labels, d.alignments, strict=True)
+        if not al.ok
+    ]
+    names = list(d.chosen) or ([d.effects[0].name] if d.effects else [])
+    fitted = {r.name: r.params for r in d.effects}
+    for name in names:
+        eff = effects.get(name)
+        if eff is None:
+            continue
+        values = d.chosen_params.get(name, fitted.get(name, {}))
+        machine = d.befores[0].setup.machine
+        for p in eff.params:
+            if p.name in values and at_bound(p, values[p.name], p.default_for(machine)):
+                unit = f" {p.unit}" if p.unit else ""
+                out.append(
+                    f"{name} fitted {p.name}={values[p.name]:.4g}{unit}, at its bound "
+                    f"({p.low:g} to {p.high:g}{unit}): the effect is stretched to its limit"
+                )
+    if out:
+        out.append(
+            "the machine file may not describe this machine: run ncperf calibrate on recordings "
+            "of it (README, 'Calibrating a machine') before trusting the tables above"
+        )
+    return out
 
 
 def toml_snippet(
@@ -106,6 +159,8 @@ def report(
         lines += [
             "                   " + t for t in toml_snippet(d, machine_file, effects).splitlines()
         ]
+    for k, w in enumerate(warnings(d, effects, labels)):
+        lines.append(f"  {'WARNING' if k == 0 else '':16s} {w}")
     return "\n".join(lines)
 
 
@@ -183,4 +238,5 @@ def to_json(
         "gap_rms_after": round(d.gap_rms_after, 3),
         "zones_after": [zone(z) for z in d.zones_after],
         "machine_file_tables": toml_snippet(d, machine, effects),
+        "warnings": warnings(d, effects or {}, [f"#{k + 1}" for k in range(len(d.alignments))]),
     }

@@ -85,6 +85,10 @@ MAX_CHOSEN = 4
 SIGN_FLIPS = 20_000
 
 # ---------------------------------------------------------------- fitting
+#: A fitted parameter within this share of its range from a bound (in log space for log
+#: parameters) sits at the bound: the fit wanted to go further than the effect allows, so
+#: the effect is stretched to cover for a machine file that is wrong, and the report says so.
+AT_BOUND = 0.01
 #: Grid points per parameter when fitting (then REFINE rounds of local refinement).
 GRID_1D = 11
 GRID_2D = 6
