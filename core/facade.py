@@ -206,6 +206,17 @@ class Ncperf:
             rows.append((str(name), hooks))
         return rows
 
+    def describe(self, name: str) -> str:
+        """What the plugin registered as ``name`` does, in one line: the first line of its
+        docstring (a module's, or an object's), or "" when it has none."""
+        plugin = self.pm.get_plugin(name)
+        doc = getattr(plugin, "__doc__", None) if plugin is not None else None
+        if not isinstance(doc, str):
+            return ""
+        for line in doc.strip().splitlines():
+            return line.strip()
+        return ""
+
 
 def machine_notes(tp: ToolPath, machine: Machine) -> ToolPath:
     """The path with what the machine file does not say about it added to its notices

@@ -90,14 +90,19 @@ def test_demo_runs_without_a_program(tmp_path):
 
 
 def test_machines_and_plugins_commands():
-    """`ncperf machines` lists presets name first; `ncperf plugins` lists hooks."""
+    """`ncperf machines` lists presets name first; `ncperf plugins` says in one line what
+    each plugin does (its docstring's first line) and lists its hooks."""
     r = run("machines")
     assert r.returncode == 0
     names = [line.split("\t")[0] for line in r.stdout.splitlines()]
     assert "siemens-840d" in names and "linuxcnc-sim" in names
     r = run("plugins")
-    assert "plugins.tangential\tncperf_evaluate" in r.stdout
-    assert "adapters.gcode\tncperf_extract" in r.stdout
+    lines = r.stdout.splitlines()
+    k = next(i for i, t in enumerate(lines) if t.startswith("plugins.tangential "))
+    assert "Model 1: crossing a tangential discontinuity" in lines[k]
+    assert lines[k + 1].split() == ["hooks:", "ncperf_evaluate"]
+    k = next(i for i, t in enumerate(lines) if t.startswith("adapters.gcode "))
+    assert "G-code" in lines[k] and lines[k + 1].split() == ["hooks:", "ncperf_extract"]
 
 
 @pytest.mark.parametrize(

@@ -463,8 +463,12 @@ def cmd_machines(_: argparse.Namespace, nc: Ncperf | None) -> int:
 
 
 def cmd_plugins(_: argparse.Namespace, nc: Ncperf) -> int:
-    for name, hooks in nc.plugins():
-        print(f"{name}\t{', '.join(hooks)}")
+    rows = nc.plugins()
+    width = max((len(name) for name, _ in rows), default=0)
+    for name, hooks in rows:
+        what = nc.describe(name) or "(no description: the plugin has no docstring)"
+        print(f"{name:{width}s}  {what}")
+        print(f"{'':{width}s}  hooks: {', '.join(hooks)}")
     return 0
 
 
