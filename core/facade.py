@@ -89,14 +89,23 @@ class Ncperf:
 
     # A1 -> A2 (-> A3)
     def analyze(
-        self, source: object, machine: Machine, options: ExtractOptions | None = None
+        self,
+        source: object,
+        machine: Machine,
+        options: ExtractOptions | None = None,
+        progress: Callable[[str], None] | None = None,
     ) -> Analysis:
+        """A1 + A2: the tool path, its evaluation, feed profile and annotations.
+        ``progress``, if given, is told each step as it starts (one short line)."""
         from core.engine.effects import setup_for
         from core.engine.profile import build_profile
         from core.view.analysis import Analysis
         from core.view.annotations import build_annotations
 
+        say = progress or (lambda _: None)
+        say("reading the program")
         tp = machine_notes(self.extract(source, options), machine)
+        say(f"the models on {tp.n:,} moves")
         if machine.effects:
             # Effects the machine file switches on are part of its model (issue 5).
             pred = self.predict(tp, setup_for(machine, self.effects()))
@@ -104,8 +113,10 @@ class Ncperf:
             assert profile is not None  # setup_for builds a profile (ramps) by default
         else:
             ev = self.evaluate(tp, machine)
+            say(f"the feed profile of {tp.n:,} moves")
             profile = build_profile(ev)
         tp.release_derived()  # the models are done with them; the peak is in what follows
+        say("zones and colour classes")
         return Analysis(tp, ev, profile, build_annotations(ev, profile))
 
     def run(

@@ -222,6 +222,35 @@ def test_compare_needs_two_programs(program):
     assert r.returncode == 2 and "two or more" in r.stderr
 
 
+def test_progress_waits_for_long_work_then_ticks():
+    """Work shorter than the delay shows nothing; a step still running after it is shown
+    by the ticker (with its seconds), and the line is blanked at the end (issue 14)."""
+    import io
+    import time
+
+    from core.cli.main import _Progress
+
+    class Tty(io.StringIO):
+        def isatty(self) -> bool:
+            return True
+
+    quick = Tty()
+    with _Progress("ncperf analyze", quick, delay=5.0) as progress:
+        progress("reading the program")
+        progress("the models on 12 moves")
+    assert quick.getvalue() == ""
+    slow = Tty()
+    with _Progress("ncperf analyze", slow, delay=0.2) as progress:
+        progress("the feed profile of 1,000,000 moves")  # before the delay: not drawn yet
+        assert slow.getvalue() == ""
+        time.sleep(0.45)  # the ticker draws it at 0.2 s
+        assert slow.getvalue().startswith(
+            "\rncperf analyze: the feed profile of 1,000,000 moves [0 s]"
+        )
+    width = len("ncperf analyze: the feed profile of 1,000,000 moves [0 s]")
+    assert slow.getvalue().endswith("\r" + " " * width + "\r")
+
+
 def test_progress_line_on_a_terminal_only():
     """A long command's progress: one line a terminal overwrites (escaped text, cleared at the
     end); nothing at all on a stream that is not a terminal."""
@@ -235,7 +264,7 @@ def test_progress_line_on_a_terminal_only():
 
     tty, log = Tty(), io.StringIO()
     for stream in (tty, log):
-        with _Progress("ncperf diagnose", stream) as progress:
+        with _Progress("ncperf diagnose", stream, delay=0) as progress:
             progress("aligning a\x1b[2Jb.csv")
             progress.clear()  # a warning follows on a line of its own
             stream.write("b.csv:3: warning\n")

@@ -42,6 +42,9 @@ MAX_DT = 60.0
 #: SAMPLE_PIECE, so memory stays bounded. Longer cycles take a larger --dt.
 MAX_SAMPLES = 20_000_000
 SAMPLE_PIECE = 262_144
+#: A command shows its progress on a terminal once it has run this long (s): shorter work
+#: needs none, and a line flashing past would only distract.
+PROGRESS_DELAY = 2.0
 
 
 def demo_program() -> str:
@@ -275,12 +278,16 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
     svg = args.svg if args.svg or not demo else DEMO_SVG
     check_outputs((svg, args.json), (program, args.machine))
     machine, note = _machine(args)
-    analysis = nc.analyze(program, machine, _options(args, machine))
+    with _Progress("ncperf analyze", sys.stderr) as progress:
+        analysis = nc.analyze(program, machine, _options(args, machine), progress)
+        written = None
+        if svg:
+            progress("writing the SVG")
+            target = FileTarget(svg, view=args.view)
+            written = nc.display(analysis.toolpath, analysis.annotations, target)
     _print_notices(analysis.toolpath.notices, sys.stderr)
     print(summary(analysis, machine_note=note))
-    if svg:
-        target = FileTarget(svg, view=args.view)
-        written = nc.display(analysis.toolpath, analysis.annotations, target)
+    if written is not None:
         print(f"  svg              {written}")
     if args.json:
         with atomic_writer(args.json) as fh:
@@ -296,19 +303,23 @@ def cmd_profile(args: argparse.Namespace, nc: Ncperf) -> int:
         raise UsageError(f"--dt must be {MIN_DT:g} to {MAX_DT:g} s, got {args.dt:g}")
     check_outputs((args.csv,), (args.program, args.machine))
     machine, note = _machine(args)
-    analysis = nc.analyze(args.program, machine, _options(args, machine))
+    with _Progress("ncperf profile", sys.stderr) as progress:
+        analysis = nc.analyze(args.program, machine, _options(args, machine), progress)
+        pr = analysis.profile
+        n = pr.n_samples(args.dt)
+        if n > MAX_SAMPLES:
+            raise UsageError(
+                f"--dt {args.dt:g} s gives {n:,} samples over the {fmt_time(pr.cycle_time)} "
+                f"cycle (at most {MAX_SAMPLES:,}, about {MAX_SAMPLES * 60 // 10**9} GB of CSV): "
+                f"take --dt {pr.cycle_time / (MAX_SAMPLES - 1):.2g} or more"
+            )
+        with atomic_writer(args.csv) as fh:
+            for first in range(0, n, SAMPLE_PIECE):  # bounded memory, however long the cycle
+                progress(f"writing the samples: {first / n:.0%} of {n:,}")
+                write_samples(
+                    pr.sample(args.dt, first=first, count=SAMPLE_PIECE), fh, header=not first
+                )
     _print_notices(analysis.toolpath.notices, sys.stderr)
-    pr = analysis.profile
-    n = pr.n_samples(args.dt)
-    if n > MAX_SAMPLES:
-        raise UsageError(
-            f"--dt {args.dt:g} s gives {n:,} samples over the {fmt_time(pr.cycle_time)} cycle "
-            f"(at most {MAX_SAMPLES:,}, about {MAX_SAMPLES * 60 // 10**9} GB of CSV): "
-            f"take --dt {pr.cycle_time / (MAX_SAMPLES - 1):.2g} or more"
-        )
-    with atomic_writer(args.csv) as fh:
-        for first in range(0, n, SAMPLE_PIECE):  # bounded memory, however long the cycle
-            write_samples(pr.sample(args.dt, first=first, count=SAMPLE_PIECE), fh, header=not first)
     tp = analysis.toolpath
     print(f"ncperf profile: {tp.source} on {machine.name}{note}")
     print(
@@ -331,13 +342,19 @@ def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
     check_outputs((args.svg,), (*args.programs, args.machine))
     machine, note = _machine(args)
     rows, panels = [], []
-    for program in args.programs:
-        an = nc.analyze(program, machine, _options(args, machine))
-        _print_notices(an.toolpath.notices, sys.stderr)
-        label = Path(program).name
-        r = compare_row(label, an)
-        rows.append(r)
-        panels.append((r, an))
+    with _Progress("ncperf compare", sys.stderr) as progress:
+        for k, program in enumerate(args.programs, start=1):
+            head = f"{Path(program).name} ({k} of {len(args.programs)})"
+
+            def step(text: str, head: str = head) -> None:
+                progress(f"{head}: {text}")
+
+            an = nc.analyze(program, machine, _options(args, machine), step)
+            progress.clear()  # the warnings on lines of their own
+            _print_notices(an.toolpath.notices, sys.stderr)
+            r = compare_row(Path(program).name, an)
+            rows.append(r)
+            panels.append((r, an))
     print(compare_table(rows, machine.name + note))
     if args.svg:
         order = {id(r): k for k, r in enumerate(ranked(rows), start=1)}
@@ -419,14 +436,19 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
     if wanted is not None:
         names = wanted
     cases, all_labels = [], []
-    for program, *traces in groups:
-        tp = nc.extract(program, _options(args, machine))
-        _print_notices(tp.notices, sys.stderr)
-        als, labels = _aligned(nc, tp, traces, args, "calibration")
-        cases.append((tp, als, labels))
-        all_labels += labels
-    base = setup_for(machine, effects, ramps=True)
-    cal = nc.calibrate(cases, base, {k: effects[k] for k in names})
+    with _Progress("ncperf calibrate", sys.stderr) as progress:
+        for program, *traces in groups:
+            progress(f"reading {Path(program).name}")
+            tp = nc.extract(program, _options(args, machine))
+            progress.clear()
+            _print_notices(tp.notices, sys.stderr)
+            progress(f"aligning {len(traces)} trace(s) on {Path(program).name}")
+            als, labels = _aligned(nc, tp, traces, args, "calibration", progress)
+            cases.append((tp, als, labels))
+            all_labels += labels
+        base = setup_for(machine, effects, ramps=True)
+        progress(f"calibrating {len(names)} effect(s) on {len(all_labels)} trace(s)")
+        cal = nc.calibrate(cases, base, {k: effects[k] for k in names})
     header = "\n".join(
         [
             f"Made by ncperf calibrate ({__version__}) on {datetime.date.today()} from",
@@ -475,20 +497,50 @@ def cmd_plugins(_: argparse.Namespace, nc: Ncperf) -> int:
 class _Progress:
     """What a long command is doing, on one line of a terminal that each step overwrites
     (with the time since the start); nothing when the stream is not a terminal (a log or a
-    pipe gets the report only). As a context manager it clears the line at the end. The
-    step's text goes through :func:`printable`; only the carriage returns are its own."""
+    pipe gets the report only). Nothing either for work shorter than ``delay`` seconds:
+    from then on the line shows the current step and, while a step lasts, its seconds tick
+    (a background thread redraws it twice a second). As a context manager it clears the
+    line at the end. The step's text goes through :func:`printable`; only the carriage
+    returns are its own."""
 
-    def __init__(self, command: str, stream: Any) -> None:
+    def __init__(self, command: str, stream: Any, *, delay: float = PROGRESS_DELAY) -> None:
+        import threading
+
         self._t0 = time.monotonic()
         self._command = command
         self._stream = getattr(stream, "raw_stream", stream)  # past _Printable: "\r" stays
         self._on = bool(getattr(stream, "isatty", lambda: False)())
         self._width = 0
+        self._delay = delay
+        self._step = ""
+        self._paused = False
+        self._lock = threading.Lock()
+        self._done = threading.Event()
+        self._ticker: threading.Thread | None = None
+        if self._on and delay > 0:
+            self._ticker = threading.Thread(target=self._tick, name="ncperf-progress", daemon=True)
+            self._ticker.start()
 
     def __call__(self, step: str) -> None:
         if not self._on:
             return
-        line = printable(f"{self._command}: {step} [{time.monotonic() - self._t0:.0f} s]")
+        with self._lock:
+            self._step, self._paused = step, False
+            if time.monotonic() - self._t0 >= self._delay:
+                self._draw()
+
+    def _tick(self) -> None:
+        if self._done.wait(self._delay):
+            return
+        while True:
+            with self._lock:
+                if self._step and not self._paused:
+                    self._draw()
+            if self._done.wait(0.5):
+                return
+
+    def _draw(self) -> None:
+        line = printable(f"{self._command}: {self._step} [{time.monotonic() - self._t0:.0f} s]")
         self._stream.write("\r" + line.ljust(self._width))
         self._stream.flush()
         self._width = len(line)
@@ -497,14 +549,19 @@ class _Progress:
         return self
 
     def __exit__(self, *exc: object) -> None:
+        self._done.set()
+        if self._ticker is not None:
+            self._ticker.join()
         self.clear()
 
     def clear(self) -> None:
         """Blank the line (before other output; the next step writes it again)."""
-        if self._on and self._width:
-            self._stream.write("\r" + " " * self._width + "\r")
-            self._stream.flush()
-            self._width = 0
+        with self._lock:
+            self._paused = True
+            if self._on and self._width:
+                self._stream.write("\r" + " " * self._width + "\r")
+                self._stream.flush()
+                self._width = 0
 
 
 class _Printable(io.TextIOBase):
