@@ -119,7 +119,7 @@ def test_sharp_corner_is_a_class_5_marker(tmp_path):
     radius = min(TIT * math.cos(b / 2) / (1 - math.cos(b / 2)), 10 / (2 * math.sin(b / 2)) - TIT)
     v = (JERK * radius**2) ** (1 / 3)
     assert 1.40 < v < 1.45  # mm/s: 98.6 % below 100 mm/s
-    root = draw(polyline([[0, 0, 0], [10, 0, 0], [10, 10, 0]], 100.0), str(tmp_path / "c.svg"))
+    root = draw(polyline([[0, 0, 0], [10, 0, 0], [10, 10, 0]], 100.0), FileTarget(tmp_path / "c.svg", colour="paper"))
     red = titled(root, "circle", "fill", COLOURS[5])
     assert red == [
         f"line 1/2: -{round(100 * (1 - v / 100))} % (tangential: jerk X), {round(v * 60)} mm/min"
@@ -140,7 +140,7 @@ def test_short_block_is_capped(tmp_path):
     feed = 10000 / 60
     assert 1 - (0.9 / T_INT) / feed == pytest.approx(0.55)
     tp = polyline([[0, 0, 0], [10, 0, 0], [10.9, 0, 0], [20.9, 0, 0]], feed)
-    root = draw(tp, str(tmp_path / "s.svg"))
+    root = draw(tp, FileTarget(tmp_path / "s.svg", colour="paper"))
     left, right = panels(root)
     assert titled(left, "polyline", "stroke", COLOURS[3]) == ["line 2: reduction 50-70 %"]
     assert titled(left, "polyline", "stroke", COLOURS[0]) == [
@@ -173,7 +173,7 @@ def test_titles_name_program_lines(tmp_path):
     cols["start"], cols["end"] = p[:-1], p[1:]
     cols["feed"][:] = 100.0
     cols["line"] = np.array([120, 130, 140, 150, 245])
-    root = draw(ToolPath(**cols), str(tmp_path / "t.svg"))
+    root = draw(ToolPath(**cols), FileTarget(tmp_path / "t.svg", colour="paper"))
     left, right = panels(root)
     lines = left.findall(f".//{NS}polyline")
     assert [el.findtext(f"{NS}title") for el in lines] == ["lines 120-245: reduction 0-10 %"]
@@ -298,7 +298,7 @@ def arc_path(kind: int) -> ToolPath:
 def test_arcs_are_curves(tmp_path, kind):
     """Arcs are sampled into many points on the circle, on the side their direction says."""
     tp = arc_path(kind)
-    root = draw(tp, str(tmp_path / "a.svg"))
+    root = draw(tp, FileTarget(tmp_path / "a.svg", colour="paper"))
     pts = np.concatenate([points(el) for el in panels(root)[0].iter(f"{NS}polyline")])
     # Screen positions of the line's start (10, -10) and the centre (0, 0) fix the scale.
     p_line = pts[0].astype(float)
@@ -455,3 +455,73 @@ def test_render_ints_matches_python_formatting():
     )
     assert render.render_ints(values, suffix, table) == want
     assert render.render_ints([], [], table) == b""
+
+
+# ------------------------------------------------------------------ issue 14: what the picture says
+def test_blocks_are_coloured_by_the_profile_by_default(tmp_path):
+    """One 10 mm line at F 100 mm/s, A 2500 mm/s^2, no jerk limit, from rest to rest: ramps of
+    F / A = 0.04 s over 2 mm each, 6 mm at F in 0.06 s: 0.14 s, a mean speed of 71.4 mm/s,
+    28.6 % below F -- class 10-30 % by default (where the time goes). The paper's cruise
+    class of the block is 0-10 % (it runs at F between its ramps): the ``paper`` colouring."""
+    from tests.conftest import machine
+
+    inf = float("inf")
+    nc = Ncperf(make_plugin_manager(builtins=PLUGINS, entry_points=False))
+    tp = polyline([[0, 0, 0], [10, 0, 0]], 100.0)
+    ann = build_annotations(nc.evaluate(tp, machine(jerk=(inf, inf, inf))))
+    assert ann.speed_share[0] == pytest.approx(10 / 0.14 / 100, rel=1e-6)
+    for colour, cls, text in (("speed", 1, "speed below F by 10-30 %"), ("paper", 0, None)):
+        out = nc.display(tp, ann, FileTarget(tmp_path / f"{colour}.svg", colour=colour))
+        left = panels(ET.parse(out).getroot())[0]
+        want = f"line 1: {text or 'reduction 0-10 %'}"
+        assert titled(left, "polyline", "stroke", COLOURS[cls]) == [want]
+    assert "where the time goes" in (tmp_path / "speed.svg").read_text()
+
+
+def test_zone_labels_never_overlap_and_share_a_ring_at_one_point():
+    """Zones at one point (Z-level step-downs) share a ring labelled "1, 2, 3"; labels of
+    zones a few pixels apart are placed so that no two overlap and none covers a ring."""
+    px = np.array([[100.0, 100.0], [100.0, 100.0], [101.0, 102.0], [112.0, 100.0], [100, 112]])
+    rings = render.zone_labels(px, [1, 2, 3, 4, 5], 900.0, 600.0)
+    assert [(r[2], r[3]) for r in rings] == [([0, 1, 2], "1, 2, 3"), ([3], "4"), ([4], "5")]
+    boxes = [r[4] for r in rings]
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1 :]:
+            assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1], (a, b)
+        for j, (x, y, *_rest) in enumerate(rings):
+            if j != i:  # no label on another zone's ring
+                r = render.ZONE_RING_PX
+                assert a[2] <= x - r or x + r <= a[0] or a[3] <= y - r or y + r <= a[1]
+        assert 0 <= a[0] and a[2] <= 900 and 0 <= a[1] and a[3] <= 600
+
+
+def test_demo_zone_labels_are_readable_and_title_is_the_file_name(tmp_path):
+    """On the bundled Z-level cavity (ten zones, several at one XY point) every rank is
+    written once, no two labels overlap, and the heading names the file, not its folders."""
+    from core.cli.main import main
+
+    out = tmp_path / "demo.svg"
+    assert main(["analyze", "--demo", "--svg", str(out)]) == 0
+    root = ET.parse(out).getroot()
+    heading = root.findtext(f"{NS}text")
+    assert heading.startswith("zlevel_cavity.ngc on ") and "/" not in heading.split(" on ")[0]
+    left = panels(root)[0]
+    labels = [
+        el
+        for grp in left.iter(f"{NS}g")
+        if grp.get("font-size") == "13"
+        for el in grp.iter(f"{NS}text")
+    ]
+    ranks = [int(r) for el in labels for r in el.text.split(", ")]
+    assert sorted(ranks) == list(range(1, 11))
+    boxes = []
+    for el in labels:
+        x, y = float(el.get("x")), float(el.get("y"))
+        boxes.append((x, y - 11, x + render.LABEL_CHAR_PX * len(el.text), y + 2))
+    for i, a in enumerate(boxes):
+        for b in boxes[i + 1 :]:
+            assert a[2] <= b[0] or b[2] <= a[0] or a[3] <= b[1] or b[3] <= a[1], (a, b)
+    # --colour paper: the paper's cruise classes instead (the title says which)
+    assert main(["analyze", "--demo", "--svg", str(out), "--colour", "paper"]) == 0
+    title = panels(ET.parse(out).getroot())[0].findtext(f"{NS}text")
+    assert title.startswith("Predicted cruise feed reduction of each block")

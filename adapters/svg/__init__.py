@@ -45,11 +45,12 @@ def ncperf_display(toolpath: ToolPath, annotations: Annotations, target: object)
     path, view = found
     if isinstance(target, ComparisonTarget | DiagnosisTarget):
         data = (
-            render_comparison(target.panels, view)
+            render_comparison(target.panels, view, target.colour)
             if isinstance(target, ComparisonTarget)
             else render_diagnosis(toolpath, annotations, target.diagnosis, view)
         )
         with atomic_writer(path, binary=True) as fh:
             fh.write(data)
         return path
-    return write_svg(toolpath, annotations, path, view)
+    colour = target.colour if isinstance(target, FileTarget) else "speed"
+    return write_svg(toolpath, annotations, path, view, colour)

@@ -29,6 +29,7 @@ Every polyline and marker has a ``<title>`` naming its program lines.
 
 from __future__ import annotations
 
+import math
 import os
 from collections.abc import Sequence
 from dataclasses import dataclass
@@ -43,7 +44,7 @@ from core.model.text import printable
 from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, ToolPath
 from core.view.annotations import Annotations
-from core.view.targets import VIEWS
+from core.view.targets import COLOURINGS, VIEWS
 from core.view.zones import Zone
 
 if TYPE_CHECKING:
@@ -114,7 +115,19 @@ PROJECTIONS: dict[str, NDArray[np.float64]] = {
 }
 VIEW_NAMES = {"xy": "top (XY)", "xz": "front (XZ)", "yz": "side (YZ)", "iso": "isometric"}
 
-LEFT_TITLE = "Predicted feed reduction (models 1-3)"
+#: Titles of the left panel by what it colours blocks by (:data:`COLOURINGS`): the feed
+#: profile's mean speed over each block against F (``speed``, the default: where the time
+#: goes, ramps and all), or each block's own predicted cruise feed (``paper``: the paper's
+#: Figure 11, which ignores the ramps).
+LEFT_TITLES = {
+    "speed": "Predicted speed over each block, below F (feed profile: where the time goes)",
+    "paper": "Predicted cruise feed reduction of each block (models 1-3, paper Fig. 11)",
+}
+LEGEND_TITLES = {
+    "speed": "Mean predicted speed of blocks below F (profile), discontinuities (models 1-3)",
+    "paper": "Predicted feed reduction of blocks and discontinuities",
+}
+CLASS_PREFIX = {"speed": "speed below F by", "paper": "reduction"}
 RIGHT_TITLE = "Block length vs L = F t_int (model 3)"
 
 
@@ -749,20 +762,102 @@ def _scale_bar(fr: Frame) -> str:
     )
 
 
+#: Zones whose rings would lie this close (px) share one ring, labelled with all their ranks
+#: (Z-level step-downs at one XY point).
+ZONE_MERGE_PX = 6.0
+ZONE_RING_PX = 7.0
+#: Size of a zone label's characters (13 px bold sans-serif), for placing labels apart.
+LABEL_CHAR_PX = 8.0
+LABEL_H_PX = 13.0
+
+
+def _overlaps(a: tuple[float, float, float, float], b: tuple[float, float, float, float]) -> bool:
+    return a[0] < b[2] and b[0] < a[2] and a[1] < b[3] and b[1] < a[3]
+
+
+def zone_labels(
+    px: NDArray[np.float64], ranks: Sequence[int], width: float, height: float
+) -> list[tuple[float, float, list[int], str, tuple[float, float, float, float]]]:
+    """Rings and labels of the zones at ``px`` (their points on the plot, rank order), placed
+    so that no two labels overlap each other or another ring.
+
+    Zones closer than ZONE_MERGE_PX share a ring whose label lists their ranks ("1, 4, 7").
+    Each label takes the first of a set of places around its ring, near to far (beside,
+    above, below, then at 2 and 3 times the distance with a leader line), that stays in the
+    plot and clear of the labels placed before it and of every ring.
+
+    Returns
+    -------
+    list of (x, y, member indices, text, label box (x0, y0, x1, y1))
+        One per ring; the text's baseline starts at (x0, y1 - 2).
+    """
+    rings: list[list] = []
+    for k, (x, y) in enumerate(px.tolist()):
+        for r in rings:
+            if math.hypot(x - r[0], y - r[1]) <= ZONE_MERGE_PX:
+                r[2].append(k)
+                break
+        else:
+            rings.append([x, y, [k]])
+    ring_boxes = [
+        (x - ZONE_RING_PX, y - ZONE_RING_PX, x + ZONE_RING_PX, y + ZONE_RING_PX)
+        for x, y, _ in rings
+    ]
+    placed: list[tuple[float, float, float, float]] = []
+    out = []
+    for i, (x, y, members) in enumerate(rings):
+        text = ", ".join(str(ranks[k]) for k in members)
+        w, h = LABEL_CHAR_PX * len(text), LABEL_H_PX
+        candidates = []
+        for reach in range(4):
+            d = ZONE_RING_PX + 2.0 + reach * (h + 4.0)
+            for dx, dy in (
+                (d, -d - h / 2),
+                (d, d - h / 2),
+                (-d - w, -d - h / 2),
+                (-d - w, d - h / 2),
+                (-w / 2, -d - h),
+                (-w / 2, d),
+            ):
+                candidates.append((x + dx, y + dy, x + dx + w, y + dy + h))
+        clear = [
+            box
+            for box in candidates
+            if not any(_overlaps(box, b) for b in placed)
+            and not any(_overlaps(box, rb) for j, rb in enumerate(ring_boxes) if j != i)
+        ]
+        inside = [b for b in clear if b[0] >= 0 and b[1] >= 0 and b[2] <= width and b[3] <= height]
+        # the nearest clear place in the plot; else the nearest clear one; else the farthest
+        best = (inside or clear or candidates[-6:])[0]
+        placed.append(best)
+        out.append((x, y, members, text, best))
+    return out
+
+
 def _zones(zones: Sequence[Zone], fr: Frame, view: str) -> str:
-    """Numbered rings at the worst zones, with their tooltip."""
+    """Numbered rings at the worst zones, with their tooltips; labels never overlap."""
     if not zones:
         return ""
     pts = np.array([z.point for z in zones], dtype=np.float64)
     px = fr.to_px(project(pts, view))
     out = ['<g font-size="13" font-weight="bold">\n']
-    for z, (x, y) in zip(zones, px.tolist(), strict=True):
+    for x, y, members, text, box in zone_labels(px, [z.rank for z in zones], PLOT_W, fr.height):
+        tip = "\n".join(zone_title(zones[k]) for k in members)
+        lx, ly = box[0], box[3] - 2.0
+        cx, cy = 0.5 * (box[0] + box[2]), 0.5 * (box[1] + box[3])
+        leader = ""
+        if math.hypot(cx - x, cy - y) > 2.5 * ZONE_RING_PX + LABEL_CHAR_PX * len(text) / 2:
+            # far from its ring: a thin line says whose label it is
+            leader = (
+                f'<path d="M{_f(x)} {_f(y)}L{_f(cx)} {_f(cy)}" stroke="#000000" '
+                f'stroke-width="0.5"/>'
+            )
         out.append(
-            f"<g><title>{escape(zone_title(z))}</title>"
-            f'<circle cx="{_f(x)}" cy="{_f(y)}" r="7" fill="none" stroke="#000000" '
-            f'stroke-width="1.5"/>'
-            f'<text x="{_f(x + 8)}" y="{_f(y - 8)}" stroke="#ffffff" stroke-width="3" '
-            f'paint-order="stroke">{z.rank}</text></g>\n'
+            f"<g><title>{escape(tip)}</title>{leader}"
+            f'<circle cx="{_f(x)}" cy="{_f(y)}" r="{ZONE_RING_PX:g}" fill="none" '
+            f'stroke="#000000" stroke-width="1.5"/>'
+            f'<text x="{_f(lx)}" y="{_f(ly)}" stroke="#ffffff" stroke-width="3" '
+            f'paint-order="stroke">{text}</text></g>\n'
         )
     out.append("</g>\n")
     return "".join(out)
@@ -778,14 +873,20 @@ def _swatch(x: float, y: float, colour: str, label: str, rapid: bool = False) ->
 
 
 def _legend(
-    ann: Annotations, x_left: float, x_right: float, y: float, info_y: float, notes: str
+    ann: Annotations,
+    x_left: float,
+    x_right: float,
+    y: float,
+    info_y: float,
+    notes: str,
+    colour: str = "speed",
 ) -> str:
     """Classes of both panels, the rapid style, the indicators that ran and the zones."""
     rapid = _colour((ann.rapid_colour,), 0)
     out = [
         '<g class="legend">\n',
         f'<text x="{x_left:.0f}" y="{y:.0f}" font-weight="bold">'
-        f"Predicted feed reduction of blocks and discontinuities</text>\n",
+        f"{LEGEND_TITLES[_colouring(ann, colour)]}</text>\n",
     ]
     yy = y + ROW
     for c, lab in enumerate(ann.class_labels):
@@ -899,23 +1000,37 @@ def _rapid_style(ann: Annotations, label: str = "rapid") -> tuple[str, str]:
     )
 
 
+def _colouring(ann: Annotations, colour: str) -> str:
+    """The colouring drawn: ``colour``, or ``paper`` when the annotations have no profile."""
+    if colour not in COLOURINGS:
+        raise ValueError(f"colour must be one of {COLOURINGS}, got {colour!r}")
+    return colour if ann.speed_class is not None else "paper"
+
+
 def _reduction_severity(
-    tp: ToolPath, ann: Annotations
+    tp: ToolPath, ann: Annotations, colour: str = "speed"
 ) -> tuple[NDArray[np.int64], dict[int, tuple[str, str]]]:
-    """Severity of each move by its reduction class (-1 for rapids), and the styles."""
+    """Severity of each move by its class (-1 for rapids), and the styles: the class of
+    the profile's mean speed (``speed``) or of the block's own cruise feed (``paper``)."""
+    how = _colouring(ann, colour)
     nclass = len(ann.class_labels)
-    mc = np.asarray(ann.move_class, dtype=np.int64)
+    mc = np.asarray(ann.speed_class if how == "speed" else ann.move_class, dtype=np.int64)
     sev = np.where(tp.is_feed, np.clip(mc, 0, nclass - 1), -1)
     styles = {-1: _rapid_style(ann)}
     for c in range(nclass):
         styles[c] = (
             f'stroke="{_colour(ann.class_colours, c)}"',
-            f"reduction {ann.class_labels[c]}",
+            f"{CLASS_PREFIX[how]} {ann.class_labels[c]}",
         )
     return sev, styles
 
 
-def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
+def shown_name(source: str) -> str:
+    """The program's file name for titles (not the folders of its path)."""
+    return os.path.basename(source.rstrip("/\\")) or source
+
+
+def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy", colour: str = "speed") -> bytes:
     """The whole SVG document (UTF-8) for a tool path and its annotations.
 
     Parameters
@@ -924,6 +1039,8 @@ def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
     ann : Annotations
         Built from an evaluation of ``tp``.
     view : {"xy", "xz", "yz", "iso"}
+    colour : {"speed", "paper"}
+        What the left panel colours blocks by (see :data:`COLOURINGS`).
 
     Returns
     -------
@@ -936,7 +1053,7 @@ def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
     fr = st.frame
     # Left (Figure 11): the severity is the reduction class.
     nclass = len(ann.class_labels)
-    sev_left, left_styles = _reduction_severity(tp, ann)
+    sev_left, left_styles = _reduction_severity(tp, ann, colour)
     rapid_style = left_styles[-1]
     left, rn_left = panel(st, tp, sev_left, left_styles)
     marks, mark_cell, mark_count = markers(st, tp, ann)
@@ -968,12 +1085,12 @@ def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
     info_y = legend_y + ROW * (max(nclass + 2, nlen + 1) + 1) + 10.0
     height = info_y + ROW * (3 + len(ann.zones)) + MARGIN
 
-    head = escape(f"{ann.title} on {ann.machine}: {VIEW_NAMES[view]} view")
+    head = escape(f"{shown_name(ann.title)} on {ann.machine}: {VIEW_NAMES[view]} view")
     s: list[bytes] = []
     w = s.append
     w(_document_head(width, height, f"ncperf: {head}", head))
     for x, title, groups, is_left in (
-        (x_left, LEFT_TITLE, left, True),
+        (x_left, LEFT_TITLES[_colouring(ann, colour)], left, True),
         (x_right, RIGHT_TITLE, right, False),
     ):
         w(
@@ -994,13 +1111,13 @@ def render_svg(tp: ToolPath, ann: Annotations, view: str = "xy") -> bytes:
             w(_zones(ann.zones, fr, view).encode())
         w(_scale_bar(fr).encode())
         w(b"</g>\n")
-    w(_legend(ann, x_left, x_right, legend_y, info_y, notes).encode())
+    w(_legend(ann, x_left, x_right, legend_y, info_y, notes, colour).encode())
     w(b"</svg>\n")
     return b"".join(s)
 
 
 def render_comparison(
-    panels: Sequence[tuple[str, ToolPath, Annotations]], view: str = "xy"
+    panels: Sequence[tuple[str, ToolPath, Annotations]], view: str = "xy", colour: str = "speed"
 ) -> bytes:
     """Several programs side by side, at one scale and in one colour scale (the reduction
     classes), each with its discontinuity markers and worst zones.
@@ -1031,7 +1148,7 @@ def render_comparison(
     s: list[bytes] = [_document_head(width, height, head, head)]
     for k, (label, tp, ann, st) in enumerate(drawn):
         x = MARGIN + k * (PLOT_W + GAP)
-        sev, styles = _reduction_severity(tp, ann)
+        sev, styles = _reduction_severity(tp, ann, colour)
         groups, _ = panel(st, tp, sev, styles)
         marks, _, _ = markers(st, tp, ann)
         s.append(
@@ -1054,7 +1171,7 @@ def render_comparison(
     out = [
         '<g class="legend">\n',
         f'<text x="{MARGIN:.0f}" y="{legend_y:.0f}" font-weight="bold">'
-        "Predicted feed reduction of blocks and discontinuities (all panels)</text>\n",
+        f"{LEGEND_TITLES[_colouring(first_ann, colour)]} (all panels)</text>\n",
     ]
     yy = legend_y + ROW
     for c, lab in enumerate(first_ann.class_labels):
@@ -1148,7 +1265,7 @@ def render_diagnosis(
         + MARGIN
     )
     head = escape(
-        f"{tp.source}: measured against predicted feed ({d.baseline} baseline), "
+        f"{shown_name(tp.source)}: measured against predicted feed ({d.baseline} baseline), "
         f"{VIEW_NAMES[view]} view"
     )
     s: list[bytes] = [_document_head(width, height, f"ncperf diagnose: {head}", head)]
@@ -1237,7 +1354,11 @@ def render_diagnosis(
 
 
 def write_svg(
-    tp: ToolPath, ann: Annotations, path: str | os.PathLike[str], view: str = "xy"
+    tp: ToolPath,
+    ann: Annotations,
+    path: str | os.PathLike[str],
+    view: str = "xy",
+    colour: str = "speed",
 ) -> str:
     """Render, then write atomically: the file is complete or absent, never partial.
 
@@ -1246,7 +1367,7 @@ def write_svg(
     str
         The path written.
     """
-    data = render_svg(tp, ann, view)
+    data = render_svg(tp, ann, view, colour)
     with atomic_writer(path, binary=True) as fh:
         fh.write(data)
     return os.fspath(path)

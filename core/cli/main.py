@@ -22,7 +22,7 @@ from core.model.errors import InputError, NcperfError, UsageError
 from core.model.preset_files import DEFAULT_PRESET
 from core.model.text import printable, printable_tree
 from core.model.tolerances import SAMPLE_DT
-from core.view.targets import VIEWS
+from core.view.targets import COLOURINGS, VIEWS
 
 # The parser and the light commands (--help, --version, machines) import neither numpy nor
 # the plugins: each command imports what it uses (issue 13: --help in under 0.15 s).
@@ -83,6 +83,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     a.add_argument("--svg", metavar="OUT", help="write the coloured tool path as SVG")
     a.add_argument("--json", metavar="OUT", help="write junctions and elements as JSON")
     a.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
+    _colour_option(a)
 
     pr = sub.add_parser("profile", help="the predicted feed profile as a trace (CSV)")
     pr.set_defaults(run=cmd_profile)
@@ -104,6 +105,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     _common(c)
     c.add_argument("--svg", metavar="OUT", help="the programs side by side, one colour scale")
     c.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
+    _colour_option(c)
 
     d = sub.add_parser(
         "diagnose",
@@ -165,6 +167,16 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     pl.set_defaults(run=cmd_plugins)
     nc.add_commands(sub)  # the plugins' own commands
     return p
+
+
+def _colour_option(p: argparse.ArgumentParser) -> None:
+    p.add_argument(
+        "--colour",
+        choices=COLOURINGS,
+        default="speed",
+        help="colour blocks by the feed profile's mean speed over each against F (speed, "
+        "default: where the time goes) or by each block's own cruise feed (paper, Fig. 11)",
+    )
 
 
 def _common(p: argparse.ArgumentParser) -> None:
@@ -283,7 +295,7 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
         written = None
         if svg:
             progress("writing the SVG")
-            target = FileTarget(svg, view=args.view)
+            target = FileTarget(svg, view=args.view, colour=args.colour)
             written = nc.display(analysis.toolpath, analysis.annotations, target)
     _print_notices(analysis.toolpath.notices, sys.stderr)
     print(summary(analysis, machine_note=note))
@@ -366,7 +378,7 @@ def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
             )
             for r, an in panels
         )
-        target = ComparisonTarget(args.svg, items, view=args.view)
+        target = ComparisonTarget(args.svg, items, view=args.view, colour=args.colour)
         written = nc.display(items[0][1], items[0][2], target)
         print(f"  svg              {written}")
     return 0

@@ -12,6 +12,9 @@ from dataclasses import dataclass
 from typing import Any
 
 VIEWS = ("xy", "xz", "yz", "iso")
+#: What blocks are coloured by: the feed profile's mean speed over the block against F
+#: (where the time goes; the default), or the block's own cruise feed (the paper's Fig. 11).
+COLOURINGS = ("speed", "paper")
 
 
 def file_target(target: Any) -> None:
@@ -19,6 +22,9 @@ def file_target(target: Any) -> None:
     object.__setattr__(target, "path", os.fspath(target.path))
     if target.view not in VIEWS:
         raise ValueError(f"view must be one of {VIEWS}, got {target.view!r}")
+    colour = getattr(target, "colour", "speed")
+    if colour not in COLOURINGS:
+        raise ValueError(f"colour must be one of {COLOURINGS}, got {colour!r}")
 
 
 @dataclass(frozen=True)
@@ -31,10 +37,13 @@ class FileTarget:
         Output file; its extension picks the display (``.svg`` ...). Kept as ``str``.
     view : {"xy", "xz", "yz", "iso"}
         Top view (xy, default), front (xz), side (yz) or isometric.
+    colour : {"speed", "paper"}
+        What blocks are coloured by (:data:`COLOURINGS`).
     """
 
     path: str | os.PathLike[str]
     view: str = "xy"
+    colour: str = "speed"
 
     def __post_init__(self) -> None:
         file_target(self)
@@ -51,11 +60,13 @@ class ComparisonTarget:
     panels : tuple of (label, ToolPath, Annotations)
         The programs, in drawing order.
     view : {"xy", "xz", "yz", "iso"}
+    colour : {"speed", "paper"}
     """
 
     path: str
     panels: tuple
     view: str = "xy"
+    colour: str = "speed"
 
     def __post_init__(self) -> None:
         file_target(self)
