@@ -21,6 +21,7 @@ _EXPORTS: dict[str, str] = {
     "ComparisonTarget": "core.view.targets",
     "DiagnosisTarget": "core.diagnosis.diagnose",
     "FileTarget": "core.view.targets",
+    "HtmlTarget": "core.view.html_target",
     "Zone": "core.view.zones",
     "InputError": "core.model.errors",
     "MachineError": "core.model.errors",
@@ -70,6 +71,7 @@ if TYPE_CHECKING:
     from core.plugins import BUILTIN_PLUGINS, make_plugin_manager
     from core.view.analysis import Analysis
     from core.view.annotations import Annotations, build_annotations
+    from core.view.html_target import HtmlTarget
     from core.view.targets import ComparisonTarget, FileTarget
     from core.view.zones import Zone
 
@@ -98,6 +100,7 @@ __all__ = [
     "Evaluation",
     "ExtractOptions",
     "FileTarget",
+    "HtmlTarget",
     "Indicator",
     "InputError",
     "Machine",

@@ -44,6 +44,7 @@ BUILTIN_PLUGINS: tuple[str, ...] = (
     "adapters.cl_data",
     "adapters.esprit_com",
     "adapters.svg",
+    "adapters.html",
     "adapters.traces",
     "plugins.tangential",
     "plugins.curvature",

@@ -77,3 +77,42 @@ def table(rows: list[Row], machine: str) -> str:
             f"{r.zones:6d} {mean} mm/min  {r.worst_zone}"
         )
     return "\n".join(out)
+
+
+def html_table(rows: list[Row]) -> tuple[tuple[str, ...], ...]:
+    """The comparison as cells for the HTML viewer: the header, then the programs ranked by
+    predicted cycle time (the columns of :func:`table`)."""
+    rows = ranked(rows)
+    best = rows[0].cycle_time if rows else 0.0
+    out: list[tuple[str, ...]] = [
+        (
+            "#",
+            "program",
+            "feed length",
+            "programmed",
+            "predicted",
+            "vs best",
+            ">= 90 % F",
+            "zones",
+            "mean feed",
+            "worst zone",
+        )
+    ]
+    for k, r in enumerate(rows, start=1):
+        slower = (r.cycle_time / best - 1) * 100 if best > 0 else 0.0
+        mean = f"{r.mean_feed:,.0f} mm/min" if np.isfinite(r.mean_feed) else "-"
+        out.append(
+            (
+                str(k),
+                r.label,
+                f"{r.feed_length:.1f} mm",
+                fmt_time(r.programmed_time),
+                fmt_time(r.cycle_time),
+                f"{slower:+.1f} %",
+                f"{r.share_at_90 * 100:.1f} %",
+                str(r.zones),
+                mean,
+                r.worst_zone,
+            )
+        )
+    return tuple(out)

@@ -82,6 +82,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     _common(a)
     a.add_argument("--svg", metavar="OUT", help="write the coloured tool path as SVG")
     a.add_argument("--json", metavar="OUT", help="write junctions and elements as JSON")
+    _html_options(a, "the interactive viewer: one self-contained HTML file")
     a.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
     _colour_option(a)
 
@@ -104,6 +105,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     c.add_argument("programs", nargs="+", metavar="PROGRAM", help="two or more tool path files")
     _common(c)
     c.add_argument("--svg", metavar="OUT", help="the programs side by side, one colour scale")
+    _html_options(c, "the programs side by side in the interactive viewer, with the ranking")
     c.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
     _colour_option(c)
 
@@ -133,6 +135,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     _trace_options(d, "the trace's")
     d.add_argument("--json", metavar="OUT", help="write the diagnosis as JSON")
     d.add_argument("--svg", metavar="OUT", help="the path coloured by gap, and feed plots")
+    _html_options(d, "the interactive viewer, coloured by gap, measured and predicted feed")
     d.add_argument("--view", choices=VIEWS, default="xy", help="SVG projection (default xy)")
 
     cal = sub.add_parser(
@@ -167,6 +170,32 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
     pl.set_defaults(run=cmd_plugins)
     nc.add_commands(sub)  # the plugins' own commands
     return p
+
+
+def _html_options(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument("--html", metavar="OUT", help=f"write {what}")
+    p.add_argument("--open", action="store_true", help="open the written HTML in a web browser")
+
+
+def _check_open(args: argparse.Namespace) -> None:
+    if args.open and not args.html:
+        raise UsageError("--open opens the file --html writes: give --html OUT.html")
+
+
+def _html_written(args: argparse.Namespace, written: object) -> None:
+    """Print the HTML file written; with --open, have it opened once the run has succeeded
+    (its outputs are renamed into place at the end of the transaction)."""
+    print(f"  html             {written}")
+    if args.open:
+        args.open_after = str(written)
+
+
+def _open_html(path: str) -> None:
+    """Open ``path`` in the user's web browser, as a ``file:`` URI."""
+    import webbrowser
+
+    if not webbrowser.open(Path(path).resolve().as_uri()):
+        print(f"ncperf: no web browser found to open {path}", file=sys.stderr)
 
 
 def _colour_option(p: argparse.ArgumentParser) -> None:
@@ -287,8 +316,9 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
     if args.demo and args.program:
         raise UsageError("give a program or --demo, not both")
     program = demo_program() if demo else args.program
-    svg = args.svg if args.svg or not demo else DEMO_SVG
-    check_outputs((svg, args.json), (program, args.machine))
+    svg = args.svg if args.svg or not demo or args.html else DEMO_SVG
+    _check_open(args)
+    check_outputs((svg, args.json, args.html), (program, args.machine))
     machine, note = _machine(args)
     with _Progress("ncperf analyze", sys.stderr) as progress:
         analysis = nc.analyze(program, machine, _options(args, machine), progress)
@@ -297,10 +327,20 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
             progress("writing the SVG")
             target = FileTarget(svg, view=args.view, colour=args.colour)
             written = nc.display(analysis.toolpath, analysis.annotations, target)
+        html = None
+        if args.html:  # before the evaluation and profile go: the page shows them
+            from core.view.html_target import HtmlTarget
+
+            progress("writing the HTML")
+            panel = (Path(program).name, analysis, program)
+            page = HtmlTarget(args.html, (panel,), view=args.view, colour=args.colour)
+            html = nc.display(analysis.toolpath, analysis.annotations, page)
     _print_notices(analysis.toolpath.notices, sys.stderr)
     print(summary(analysis, machine_note=note))
     if written is not None:
         print(f"  svg              {written}")
+    if html is not None:
+        _html_written(args, html)
     if args.json:
         with atomic_writer(args.json) as fh:
             write_json(analysis, fh)
@@ -351,7 +391,8 @@ def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
 
     if len(args.programs) < 2:
         raise UsageError("compare needs two or more programs")
-    check_outputs((args.svg,), (*args.programs, args.machine))
+    _check_open(args)
+    check_outputs((args.svg, args.html), (*args.programs, args.machine))
     machine, note = _machine(args)
     rows, panels = [], []
     with _Progress("ncperf compare", sys.stderr) as progress:
@@ -381,6 +422,23 @@ def cmd_compare(args: argparse.Namespace, nc: Ncperf) -> int:
         target = ComparisonTarget(args.svg, items, view=args.view, colour=args.colour)
         written = nc.display(items[0][1], items[0][2], target)
         print(f"  svg              {written}")
+    if args.html:
+        from core.cli.compare import html_table
+        from core.view.html_target import HtmlTarget
+
+        rank = {id(r): k for k, r in enumerate(ranked(rows), start=1)}
+        by_rank = sorted(
+            zip(rows, panels, args.programs, strict=True), key=lambda x: rank[id(x[0])]
+        )
+        html = HtmlTarget(
+            args.html,
+            tuple((f"#{rank[id(r)]} {r.label}", p[1], prog) for r, p, prog in by_rank),
+            table=html_table(rows),
+            view=args.view,
+            colour=args.colour,
+        )
+        first = by_rank[0][1][1]
+        _html_written(args, nc.display(first.toolpath, first.annotations, html))
     return 0
 
 
@@ -388,7 +446,8 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     from core.cli.diagnosis_report import report, to_json
     from core.engine.effects import setup_for
 
-    check_outputs((args.json, args.svg), (args.program, *args.traces, args.machine))
+    _check_open(args)
+    check_outputs((args.json, args.svg, args.html), (args.program, *args.traces, args.machine))
     machine, note = _machine(args)
     effects = nc.effects()
     wanted = _wanted(args.effects, list(effects), "unknown effect {names} (effects: {known})")
@@ -424,6 +483,12 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
 
         written = nc.display(tp, d.annotations(), DiagnosisTarget(args.svg, d, view=args.view))
         print(f"  svg              {written}")
+    if args.html:
+        from core.view.html_target import HtmlTarget
+
+        panel = (Path(args.program).name, None, args.program)
+        target = HtmlTarget(args.html, (panel,), diagnosis=d, view=args.view)
+        _html_written(args, nc.display(tp, d.annotations(), target))
     return 0
 
 
@@ -627,7 +692,10 @@ def _main(argv: list[str] | None) -> int:
         return 2
     try:
         with transaction():  # a failure leaves none of the run's outputs behind
-            return int(args.run(args, nc))
+            rc = int(args.run(args, nc))
+        if rc == 0 and getattr(args, "open_after", None):
+            _open_html(args.open_after)  # once the file is in place
+        return rc
     except UsageError as exc:
         print(f"ncperf: {exc}", file=sys.stderr)
         return 2

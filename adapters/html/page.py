@@ -1,0 +1,618 @@
+"""Build the self-contained HTML viewer: one file, scripts and styles inline, the tool path and
+its predictions as compressed typed arrays (zlib, base64) that ``viewer.js`` draws with WebGL.
+
+What is embedded, per program (a *panel*; ``compare`` has several):
+
+* the path as a polyline of points: each move adds ``npts`` points (1 for a line, the
+  samples of an arc, its end included), preceded by its own start where it does not begin
+  at the previous move's end (``npts`` has bit 7 set then). Points are integers of
+  ``quantum`` mm from ``centre`` (0.1 um, or coarser for paths over 100 m across), stored
+  per axis as differences from the previous point: small integers that zlib packs tightly
+  (a 1M-move raster takes about 3 bytes a point). Arcs are drawn as chords whose sagitta
+  is at most :data:`CHORD_REL` of the path's extent (2 to :data:`ARC_MAX_SEGMENTS` per arc);
+* per move: kind (rapid, line, arc), program line, programmed feed (mm/min), the profile's
+  mean speed over F (``speed_share``, 1/65535), the three class arrays the colour modes use,
+  length (mm), the profile's entry, peak and exit speeds (of the largest speed, 1/65535)
+  and where along the move the ramps end and start (1/255 of its length) for the speed
+  plot, and what caps the block (an index into ``names``);
+* per reported junction: the move it ends, its class, predicted feed and binding limit;
+* the program text (zlib), unless it is over :data:`TEXT_LIMIT` (the page says so).
+
+Every array is little-endian, its bytes split into planes (all first bytes, then all second
+bytes...) before compression, which lets zlib find the slowly varying high bytes. The small
+metadata (names, zones, labels, the table) is JSON in a ``<script type="application/json">``
+block, with ``<``, ``>``, ``&`` and U+2028/2029 escaped so no input text can close the block;
+the page puts every text it shows in place with ``textContent``.
+"""
+
+from __future__ import annotations
+
+import base64
+import json
+import math
+import zlib
+from dataclasses import dataclass, field
+from importlib import resources
+from typing import TYPE_CHECKING, Any
+
+import numpy as np
+from numpy.typing import NDArray
+
+from core.diagnosis.rules import GAP_COLOURS, GAP_LABELS
+from core.engine.indicators import REDUCTION_LABELS, reduction_class
+from core.model import geometry as g
+from core.model.text import printable, printable_tree
+from core.model.toolpath import MoveKind, ToolPath
+from core.view.annotations import (
+    LENGTH_COLOURS,
+    LENGTH_LABELS,
+    REDUCTION_COLOURS,
+    Annotations,
+)
+
+if TYPE_CHECKING:
+    from core.diagnosis.diagnose import Diagnosis
+    from core.engine.indicators import Evaluation
+    from core.engine.profile import Profile
+
+#: Finest coordinate step embedded (mm): 0.1 um, below any controller's resolution.
+QUANTUM = 1e-4
+#: Largest integer coordinate (the quantum grows for paths wider than 2^30 quanta).
+MAX_UNITS = 2**30
+#: Arc chords deviate from the arc by at most this share of the path's largest extent
+#: (0.2 px on a 1000 px view of the whole path).
+CHORD_REL = 2e-4
+ARC_MIN_SEGMENTS = 2
+ARC_MAX_SEGMENTS = 64
+#: Most arc sample points in all: beyond it arcs get fewer segments (bounds the file).
+ARC_POINT_BUDGET = 2_000_000
+#: Program text beyond this many bytes is not embedded (the page says so).
+TEXT_LIMIT = 50 * 2**20
+#: Measured samples embedded for the plot of a diagnosis, at most (per trace).
+MAX_MEASURED = 500_000
+PER_MIN = 60.0
+U16 = 65535
+#: Bit of ``npts`` that says the move's own start point comes first.
+BREAK = 0x80
+
+_KIND_RAPID, _KIND_LINE, _KIND_ARC = 0, 1, 2
+
+
+def _read_asset(name: str) -> str:
+    return resources.files("adapters.html").joinpath(name).read_text(encoding="utf-8")
+
+
+def json_for_script(value: object) -> str:
+    """JSON safe inside ``<script type="application/json">``: no ``<``, ``>``, ``&`` or line
+    separators that could end the block or confuse a parser; NaN becomes null."""
+    text = json.dumps(value, ensure_ascii=False, allow_nan=False, separators=(",", ":"))
+    return (
+        text.replace("&", "\\u0026")
+        .replace("<", "\\u003c")
+        .replace(">", "\\u003e")
+        .replace("\u2028", "\\u2028")
+        .replace("\u2029", "\\u2029")
+    )
+
+
+@dataclass
+class Blobs:
+    """The binary arrays of a page, each a base64 text in its own script element."""
+
+    items: list[tuple[str, str]] = field(default_factory=list)
+    raw_bytes: int = 0
+
+    def add(self, arr: NDArray, *, delta: bool = False) -> dict[str, Any]:
+        """Embed ``arr`` (1-D, or 2-D stored row by row); returns its spec for the JSON.
+
+        ``delta``: integers stored as differences from the previous value of their row
+        (int32 wrap-around), undone in the page by a running sum.
+        """
+        a = np.ascontiguousarray(arr)
+        if a.dtype.byteorder == ">":
+            a = a.astype(a.dtype.newbyteorder("<"))
+        if delta:
+            if a.dtype != np.int32:
+                raise ValueError(f"delta coding needs int32, got {a.dtype}")
+            d = np.empty_like(a)
+            if a.shape[-1]:
+                d[..., 0] = a[..., 0]
+                d[..., 1:] = np.diff(a.astype(np.int64), axis=-1).astype(np.int32)
+            a = d
+        size = a.dtype.itemsize
+        raw = a.tobytes()
+        if size > 1:  # byte planes
+            raw = np.frombuffer(raw, dtype=np.uint8).reshape(-1, size).T.tobytes()
+        blob = zlib.compress(raw, 6)
+        self.raw_bytes += a.nbytes
+        ident = f"b{len(self.items)}"
+        self.items.append((ident, base64.b64encode(blob).decode("ascii")))
+        return {
+            "id": ident,
+            "dtype": a.dtype.str.lstrip("<|="),
+            "shape": list(a.shape),
+            "delta": delta,
+        }
+
+    def html(self) -> str:
+        return "".join(
+            f'<script type="application/octet-stream" id="{i}">{b}</script>\n'
+            for i, b in self.items
+        )
+
+
+def arc_counts(tp: ToolPath, arcs: NDArray[np.int64], extent: float) -> NDArray[np.int64]:
+    """Segments per arc so that the sagitta r (1 - cos(a/2)) of each chord stays below
+    CHORD_REL * extent; within ARC_MIN_SEGMENTS..ARC_MAX_SEGMENTS and the point budget."""
+    if arcs.size == 0:
+        return np.zeros(0, dtype=np.int64)
+    eps = CHORD_REL * max(extent, QUANTUM)
+    r = tp.radius[arcs]
+    with np.errstate(divide="ignore", invalid="ignore"):
+        step = 2.0 * np.arccos(np.clip(1.0 - eps / r, -1.0, 1.0))
+        n = np.ceil(tp.sweep[arcs] / step)
+    n = np.where(np.isfinite(n), n, ARC_MIN_SEGMENTS)
+    n = np.clip(n, ARC_MIN_SEGMENTS, ARC_MAX_SEGMENTS).astype(np.int64)
+    total = int(n.sum())
+    if total > ARC_POINT_BUDGET:
+        n = np.maximum(n * ARC_POINT_BUDGET // total, ARC_MIN_SEGMENTS)
+    return n
+
+
+@dataclass(frozen=True)
+class Geometry:
+    """The drawn polyline of a tool path (see the module docstring).
+
+    Attributes
+    ----------
+    points : (p, 3) float, mm
+    npts : (n,) uint8
+        Points each move adds, bit 7 set where its own start comes first.
+    first, last : (n,) int64
+        Index in ``points`` of each move's start and end.
+    """
+
+    points: NDArray[np.float64]
+    npts: NDArray[np.uint8]
+    first: NDArray[np.int64]
+    last: NDArray[np.int64]
+
+
+def geometry(tp: ToolPath, quantum: float, centre: NDArray[np.float64]) -> Geometry:
+    """The polyline of ``tp``, arcs tessellated, with breaks where moves do not join (on the
+    grid of ``quantum`` mm around ``centre``)."""
+    n = tp.n
+    ext = float(np.ptp(np.concatenate([tp.start, tp.end]), axis=0).max()) if n else 0.0
+    arcs = np.flatnonzero(tp.is_arc)
+    ok = (
+        np.isfinite(tp.radius[arcs])
+        & np.isfinite(tp.sweep[arcs])
+        & np.isfinite(tp.pitch[arcs])
+        & (tp.sweep[arcs] > 0)
+    )
+    arcs = arcs[ok]
+    counts = arc_counts(tp, arcs, ext)
+    add = np.ones(n, dtype=np.int64)
+    add[arcs] = counts
+    qs = np.rint((tp.start - centre) / quantum)
+    qe = np.rint((tp.end - centre) / quantum)
+    brk = np.ones(n, dtype=bool)
+    if n > 1:
+        brk[1:] = np.any(qs[1:] != qe[:-1], axis=1)
+    per = add + brk
+    last = np.cumsum(per) - 1
+    first = last - add
+    pts = np.empty((int(per.sum()), 3))
+    pts[first] = tp.start  # where there is no break, the previous end lands here too
+    pts[last] = tp.end
+    if arcs.size:
+        samples = g.sample_arcs(
+            tp.start[arcs],
+            tp.center[arcs],
+            tp.normal[arcs],
+            tp.kind[arcs] == MoveKind.ARC_CCW,
+            tp.sweep[arcs],
+            tp.pitch[arcs],
+            counts,
+        )
+        m = counts + 1
+        local = np.arange(samples.shape[0]) - np.repeat(np.cumsum(m) - m, m)
+        inner = (local > 0) & (local < np.repeat(counts, m))
+        pts[np.repeat(first[arcs], m)[inner] + local[inner]] = samples[inner]
+    # Where moves join, the shared point is the previous end (written last, below).
+    joined = np.flatnonzero(~brk)
+    pts[first[joined]] = tp.end[joined - 1]
+    npts = (add | np.where(brk, BREAK, 0)).astype(np.uint8)
+    return Geometry(pts, npts, first, last)
+
+
+def _names(ev: Evaluation | None, ann: Annotations) -> list[str]:
+    """The "indicator: limit" name of every (indicator, label) pair, in index order."""
+    if ev is not None:
+        ind, lab = ev.indicator_names, ev.labels
+    else:
+        ind, lab = ann.indicator_names, ann.labels
+    return [f"{i}: {b}" for i in ind for b in lab] or ["?"]
+
+
+def _name_index(ind: NDArray, lim: NDArray, nlab: int) -> NDArray[np.int16]:
+    ind = np.asarray(ind, dtype=np.int64)
+    lim = np.asarray(lim, dtype=np.int64)
+    ok = (ind >= 0) & (lim >= 0)
+    return np.where(ok, ind * max(nlab, 1) + lim, -1).astype(np.int16)
+
+
+def _u16(x: NDArray, scale: float) -> NDArray[np.uint16]:
+    v = np.nan_to_num(np.asarray(x, dtype=np.float64) / scale, nan=0.0)
+    return np.rint(np.clip(v, 0.0, 1.0) * U16).astype(np.uint16)
+
+
+def _u8(x: NDArray) -> NDArray[np.uint8]:
+    v = np.nan_to_num(np.asarray(x, dtype=np.float64), nan=0.0)
+    return np.rint(np.clip(v, 0.0, 1.0) * 255).astype(np.uint8)
+
+
+def _profile_arrays(blobs: Blobs, tp: ToolPath, pr: Profile, spec: dict[str, Any]) -> None:
+    """Entry, peak and exit speeds and the ramps' ends, for the speed plot."""
+    v = np.stack([pr.v_entry, pr.v_peak, pr.v_exit])
+    finite = v[np.isfinite(v)]
+    vmax = float(finite.max()) if finite.size else 0.0
+    vmax = vmax if vmax > 0 else 1.0
+    _, _, d_up, d_dn, _ = pr.phases
+    length = tp.length
+    with np.errstate(divide="ignore", invalid="ignore"):
+        inv = np.where(length > 0, 1.0 / length, 0.0)
+    h0 = pr.hold_start * inv
+    up = (pr.hold_start + np.nan_to_num(d_up)) * inv
+    dn = 1.0 - (pr.hold_end + np.nan_to_num(d_dn)) * inv
+    h1 = 1.0 - pr.hold_end * inv
+    spec["vmax"] = vmax * PER_MIN
+    spec["v"] = blobs.add(_u16(v, vmax))
+    spec["frac"] = blobs.add(np.stack([_u8(h0), _u8(up), _u8(np.maximum(dn, up)), _u8(h1)]))
+
+
+def _text(program: str | None) -> tuple[str | None, str]:
+    """The program text for the hover (None if not embedded) and a note saying why not."""
+    if not program:
+        return None, "program text not embedded (no program file)"
+    try:
+        with open(program, "rb") as fh:
+            data = fh.read(TEXT_LIMIT + 1)
+    except OSError as exc:
+        return None, f"program text not embedded ({exc.strerror})"
+    if len(data) > TEXT_LIMIT:
+        return None, f"program text not embedded (over {TEXT_LIMIT // 2**20} MB)"
+    text = data.decode("utf-8", errors="surrogateescape")
+    # Every control, bidi control and undecodable byte as a visible escape (as the terminal
+    # and the SVG show them); newlines kept: the page splits the text into lines.
+    return printable(text.replace("\r\n", "\n"), lines=True), ""
+
+
+def panel_data(
+    blobs: Blobs,
+    label: str,
+    tp: ToolPath,
+    ann: Annotations,
+    *,
+    evaluation: Evaluation | None = None,
+    profile: Profile | None = None,
+    program: str | None = None,
+    diagnosis: Diagnosis | None = None,
+    gap_class: NDArray[np.int8] | None = None,
+    centre: NDArray[np.float64] | None = None,
+) -> dict[str, Any]:
+    """Embed one program's arrays in ``blobs``; returns its JSON description.
+
+    Parameters
+    ----------
+    blobs : Blobs
+    label : str
+    tp : ToolPath
+    ann : Annotations
+        The predicted classes of ``tp`` (speed share, reduction, length, junctions, zones).
+    evaluation, profile : optional
+        What caps each block (hover) and the feed profile (speed plot).
+    program : str, optional
+        The main program file, whose lines the hover shows.
+    diagnosis : Diagnosis, optional
+        Adds the gap per move (``gap_class``, one per move), the gap zones (instead of
+        ``ann``'s) and the measured feed.
+    centre : (3,) float, mm, optional
+        Origin of the embedded coordinates (``compare``: one for all programs).
+    """
+    n = tp.n
+    if np.shape(ann.move_class) != (n,) or np.shape(ann.length_class) != (n,):
+        raise ValueError(
+            f"annotations must have one class per move ({n}), got {np.shape(ann.move_class)} "
+            f"and {np.shape(ann.length_class)}"
+        )
+    bad = ~(np.isfinite(tp.start).all(axis=1) & np.isfinite(tp.end).all(axis=1))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ValueError(
+            f"{tp.source}:{tp.line[i]}: move {i} has a non-finite end point; it cannot be drawn"
+        )
+    pts_all = np.concatenate([tp.start, tp.end]) if n else np.zeros((1, 3))
+    lo, hi = pts_all.min(axis=0), pts_all.max(axis=0)
+    if centre is None:
+        centre = 0.5 * (lo + hi)
+    reach = float(np.max(np.abs(np.concatenate([lo - centre, hi - centre])))) if n else 0.0
+    quantum = max(QUANTUM, 2.0 * reach / MAX_UNITS * 1.01)
+    geo = geometry(tp, quantum, centre)
+    # Arc samples bulge beyond the end points: the box is the drawn points'.
+    if geo.points.size:
+        lo, hi = geo.points.min(axis=0), geo.points.max(axis=0)
+    q = np.rint((geo.points - centre) / quantum).astype(np.int32)
+
+    ev, pr = evaluation, profile
+    names = _names(ev, ann)
+    nlab = len(ev.labels) if ev is not None else len(ann.labels)
+
+    kind = np.where(tp.is_arc, _KIND_ARC, np.where(tp.is_feed, _KIND_LINE, _KIND_RAPID))
+    feed = np.where(tp.is_feed, tp.feed * PER_MIN, np.nan).astype(np.float32)
+    share = ann.speed_share
+    if share is None and pr is not None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            share = np.minimum(tp.length / (pr.time * tp.feed), 1.0)
+    spec: dict[str, Any] = {
+        "label": label,
+        "source": tp.source,
+        "n": n,
+        "centre": centre.tolist(),
+        "quantum": quantum,
+        "lo": (lo - centre).tolist(),
+        "hi": (hi - centre).tolist(),
+        "names": names,
+        "npts": blobs.add(geo.npts),
+        "pts": blobs.add(np.ascontiguousarray(q.T), delta=True),
+        "kind": blobs.add(kind.astype(np.int8)),
+        "line": blobs.add(tp.line.astype(np.int32), delta=True),
+        "feed": blobs.add(feed),
+        "length": blobs.add(tp.length.astype(np.float32)),
+        "mclass": blobs.add(np.asarray(ann.move_class, dtype=np.int8)),
+        "lclass": blobs.add(np.asarray(ann.length_class, dtype=np.int8)),
+    }
+    if share is not None:
+        spec["share"] = blobs.add(_u16(np.where(tp.is_feed, share, np.nan), 1.0))
+    sclass = ann.speed_class
+    if sclass is None and share is not None:
+        sclass = np.where(
+            tp.is_feed, reduction_class(1.0 - np.nan_to_num(share, nan=1.0)), -1
+        ).astype(np.int8)
+    if sclass is not None:
+        spec["sclass"] = blobs.add(np.asarray(sclass, dtype=np.int8))
+    if ev is not None:
+        spec["elim"] = blobs.add(_name_index(ev.element_indicator, ev.element_limit, nlab))
+        efeed = np.where(tp.is_feed, ev.element_feed * PER_MIN, np.nan)
+        spec["efeed"] = blobs.add(efeed.astype(np.float32))
+    j = np.asarray(ann.junction, dtype=np.int64)
+    if j.size:
+        spec["junction"] = blobs.add(j.astype(np.int32), delta=True)
+        spec["jclass"] = blobs.add(np.asarray(ann.junction_class, dtype=np.int8))
+        spec["jfeed"] = blobs.add((np.asarray(ann.junction_feed) * PER_MIN).astype(np.float32))
+        spec["jname"] = blobs.add(_name_index(ann.junction_cause, ann.junction_limit, nlab))
+    if pr is not None:
+        _profile_arrays(blobs, tp, pr, spec)
+    if tp.origin is not None:
+        spec["origin"] = blobs.add(tp.origin.astype(np.int16))
+        spec["origins"] = list(tp.origins)
+        spec["origin_files"] = list(tp.origin_files)
+    text, note = _text(program)
+    if text is not None:
+        raw = text.encode("utf-8")
+        spec["text"] = blobs.add(np.frombuffer(raw, dtype=np.uint8))
+    spec["text_note"] = note
+    spec["zones"] = [
+        {
+            "rank": z.rank,
+            "lines": z.lines,
+            "first": z.first,
+            "last": z.last,
+            "time_lost": z.time_lost,
+            "cause": z.cause,
+            "worst": round(100.0 * z.worst_reduction),
+            "min_feed": z.min_feed * PER_MIN,
+            "origin": z.origin,
+        }
+        for z in ann.zones
+    ]
+    if diagnosis is not None:
+        if gap_class is None or np.shape(gap_class) != (n,):
+            raise ValueError(f"a diagnosis needs one gap class per move ({n})")
+        spec["gclass"] = blobs.add(np.asarray(gap_class, dtype=np.int8))
+        _diagnosis_arrays(blobs, tp, diagnosis, spec)
+    return spec
+
+
+def _diagnosis_arrays(blobs: Blobs, tp: ToolPath, d: Diagnosis, spec: dict[str, Any]) -> None:
+    """The gap per move, the gap zones and the measured feed over arc length."""
+    gap = d.move_gap()
+    spec["gap"] = blobs.add(gap.astype(np.float32))
+    zones = []
+    for k, z in enumerate(d.zones, start=1):
+        a, b = (int(m) for m in tp.move_at(np.array([z.s_start, z.s_end])))
+        lines = f"{z.line_start}" if z.line_start == z.line_end else f"{z.line_start}-{z.line_end}"
+        zones.append(
+            {
+                "rank": k,
+                "lines": lines,
+                "first": a,
+                "last": b,
+                "time_lost": z.time_s,
+                "cause": f"{z.feature}, RMS gap {z.gap_rms:.0f} mm/min",
+                "program": z.program,
+            }
+        )
+    spec["zones"] = zones
+    measured = []
+    for dd in d.data:
+        if dd.case != 0:
+            continue
+        step = max(1, math.ceil(dd.s.size / MAX_MEASURED))
+        measured.append(
+            {
+                "label": dd.label,
+                "s": blobs.add(dd.s[::step].astype(np.float32)),
+                "v": blobs.add((dd.v[::step] * PER_MIN).astype(np.float32)),
+            }
+        )
+    spec["measured"] = measured
+    if d.before.profile is None:
+        # The paper's point model has no profile: the plot shows each block's own feed.
+        spec["block_speed"] = blobs.add((d.before.block_speed * PER_MIN).astype(np.float32))
+
+
+def page(meta: dict[str, Any], blobs: Blobs) -> bytes:
+    """The whole HTML document (UTF-8)."""
+    template = _read_asset("template.html")
+    title = printable(meta.get("title", "ncperf"))
+    title = title.replace("&", "&amp;").replace("<", "&lt;").replace(">", "&gt;")
+    # Pieces are put in place in one pass, so text in one cannot be taken for another's mark.
+    parts = {
+        "@@TITLE@@": title,
+        "@@CSS@@": _read_asset("viewer.css"),
+        "@@META@@": json_for_script(printable_tree(meta)),
+        "@@BLOBS@@": blobs.html(),
+        "@@JS@@": _read_asset("viewer.js"),
+    }
+    out = []
+    rest = template
+    while True:
+        k = rest.find("@@")
+        if k < 0:
+            out.append(rest)
+            break
+        end = rest.find("@@", k + 2)
+        key = rest[k : end + 2]
+        if end < 0 or key not in parts:
+            out.append(rest[: k + 2])
+            rest = rest[k + 2 :]
+            continue
+        out.append(rest[:k])
+        out.append(parts[key])
+        rest = rest[end + 2 :]
+    return "".join(out).encode("utf-8")
+
+
+def _classes(labels: tuple[str, ...], colours: tuple[str, ...]) -> dict[str, list[str]]:
+    return {"labels": list(labels), "colours": list(colours)}
+
+
+def build(tp: ToolPath, ann: Annotations, target: Any, view: str) -> bytes:
+    """The page for a display target: an :class:`~core.view.targets.HtmlTarget` (analyze,
+    compare, diagnose), a :class:`~core.view.targets.ComparisonTarget`, a
+    :class:`~core.diagnosis.diagnose.DiagnosisTarget` or a plain file target (the path and
+    its annotations only: no speed plot, no limits, no program text)."""
+    from core.view.annotations import build_annotations
+
+    blobs = Blobs()
+    panels: list[dict[str, Any]] = []
+    table: list[list[str]] = []
+    verdict = ""
+    kind = "analyze"
+    diagnosis = getattr(target, "diagnosis", None)
+    items = list(getattr(target, "panels", ()) or ())
+    if diagnosis is not None:
+        kind = "diagnose"
+        pred = diagnosis.before
+        program = items[0][2] if items and len(items[0]) > 2 else None
+        predicted = build_annotations(pred.evaluation, pred.profile)
+        panels.append(
+            panel_data(
+                blobs,
+                tp.source,
+                tp,
+                predicted,
+                evaluation=pred.evaluation,
+                profile=pred.profile,
+                program=program,
+                diagnosis=diagnosis,
+                gap_class=np.asarray(ann.move_class, dtype=np.int8),
+            )
+        )
+        verdict = (
+            f"best effect: {diagnosis.best_effect}; chosen: {' + '.join(diagnosis.chosen)}; "
+            f"gap {diagnosis.gap_rms_before:.0f} -> {diagnosis.gap_rms_after:.0f} mm/min "
+            "(RMS over time)"
+            if diagnosis.best_effect
+            else f"no effect explains the gap ({diagnosis.gap_rms_before:.0f} mm/min RMS): "
+            + (diagnosis.reason or "the model already explains this trace")
+        )
+    elif items:
+        # (label, Analysis, program) from an HtmlTarget; (label, ToolPath, Annotations)
+        # from a ComparisonTarget.
+        resolved = []
+        for item in items:
+            label, second, third = (tuple(item) + (None, None))[:3]
+            if isinstance(second, ToolPath):
+                resolved.append((label, second, third, None, None, None))
+            else:
+                an = second
+                resolved.append(
+                    (label, an.toolpath, an.annotations, an.evaluation, an.profile, third)
+                )
+        kind = "compare" if len(resolved) > 1 else "analyze"
+        centre = None
+        if len(resolved) > 1:
+            pts = np.concatenate([np.concatenate([r[1].start, r[1].end]) for r in resolved])
+            if pts.size:
+                centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+        for label, rtp, rann, ev, pr, program in resolved:
+            panels.append(
+                panel_data(
+                    blobs,
+                    label,
+                    rtp,
+                    rann,
+                    evaluation=ev,
+                    profile=pr,
+                    program=program,
+                    centre=centre,
+                )
+            )
+        table = [list(map(str, row)) for row in getattr(target, "table", ()) or ()]
+    else:
+        panels.append(panel_data(blobs, tp.source, tp, ann))
+    first = panels[0]
+    if kind == "compare":
+        title = f"ncperf compare on {ann.machine}"
+    elif kind == "diagnose":
+        title = f"ncperf diagnose: {tp.source}"
+    else:
+        title = f"ncperf: {first['label']} on {ann.machine}"
+    modes = []
+    if any("sclass" in p for p in panels):
+        modes.append(["speed", "predicted speed / F (where the time goes)"])
+    modes.append(["junction", "reduction classes at junctions (Fig. 11)"])
+    modes.append(["length", "block length against L = F t_int (Fig. 10)"])
+    if kind == "diagnose":
+        modes.insert(0, ["gap", "measured - predicted feed (gap)"])
+    reduction = _classes(REDUCTION_LABELS, REDUCTION_COLOURS)
+    if kind != "diagnose":
+        reduction = _classes(ann.class_labels, ann.class_colours)
+    meta = {
+        "kind": kind,
+        "title": title,
+        "machine": ann.machine,
+        "view": view,
+        "modes": modes,
+        "classes": {
+            "speed": reduction,
+            "junction": reduction,
+            "length": _classes(LENGTH_LABELS, LENGTH_COLOURS),
+            "gap": _classes(GAP_LABELS, GAP_COLOURS),
+        },
+        "rapid_colour": ann.rapid_colour,
+        "panels": panels,
+        "table": table,
+        "verdict": verdict,
+        "raw_bytes": blobs.raw_bytes,
+        "default_mode": (
+            "gap"
+            if kind == "diagnose"
+            else "junction"
+            if getattr(target, "colour", "speed") == "paper"
+            else modes[0][0]
+        ),
+    }
+    return page(meta, blobs)
