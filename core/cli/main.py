@@ -322,11 +322,11 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
     machine, note = _machine(args)
     with _Progress("ncperf analyze", sys.stderr) as progress:
         analysis = nc.analyze(program, machine, _options(args, machine), progress)
-        written = None
-        if svg:
-            progress("writing the SVG")
-            target = FileTarget(svg, view=args.view, colour=args.colour)
-            written = nc.display(analysis.toolpath, analysis.annotations, target)
+        report = summary(analysis, machine_note=note)
+        if args.json:
+            progress("writing the JSON")
+            with atomic_writer(args.json) as fh:
+                write_json(analysis, fh)
         html = None
         if args.html:  # before the evaluation and profile go: the page shows them
             from core.view.html_target import HtmlTarget
@@ -335,15 +335,22 @@ def cmd_analyze(args: argparse.Namespace, nc: Ncperf) -> int:
             panel = (Path(program).name, analysis, program)
             page = HtmlTarget(args.html, (panel,), view=args.view, colour=args.colour)
             html = nc.display(analysis.toolpath, analysis.annotations, page)
-    _print_notices(analysis.toolpath.notices, sys.stderr)
-    print(summary(analysis, machine_note=note))
+        tp, ann = analysis.toolpath, analysis.annotations
+        # What is left to draw needs the path and its classes only: the evaluation and the
+        # profile go before the drawing's own peak (1M moves: about 300 MB less).
+        del analysis
+        written = None
+        if svg:
+            progress("writing the SVG")
+            target = FileTarget(svg, view=args.view, colour=args.colour)
+            written = nc.display(tp, ann, target)
+    _print_notices(tp.notices, sys.stderr)
+    print(report)
     if written is not None:
         print(f"  svg              {written}")
     if html is not None:
         _html_written(args, html)
     if args.json:
-        with atomic_writer(args.json) as fh:
-            write_json(analysis, fh)
         print(f"  json             {args.json}")
     return 0
 

@@ -141,7 +141,6 @@ class Evaluation:
 
     toolpath: ToolPath
     machine: Machine
-    indicators: tuple[Indicator, ...]
     indicator_names: tuple[str, ...]
     labels: tuple[str, ...]
     junction: NDArray[np.int64]
@@ -295,7 +294,6 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     return Evaluation(
         toolpath=tp,
         machine=machine,
-        indicators=tuple(indicators),
         indicator_names=tuple(names),
         labels=tuple(label_id),
         junction=j,

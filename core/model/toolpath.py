@@ -2,7 +2,10 @@
 
 There is no move object. A program of a million moves is a handful of
 contiguous arrays; derived quantities (length, tangents, curvature) are
-computed once, vectorised, on first use.
+computed once, vectorised, on first use. A column that holds one value over the
+whole program (the arc columns of a program of lines, dwell, tolerance ...) is
+kept as a read-only broadcast of that value (:data:`COMPACT_COLUMNS`): same
+values, shape and dtype, no memory per move; columns are read, never written.
 """
 
 from __future__ import annotations
@@ -69,18 +72,51 @@ class ExtractOptions:
     setup: ControllerSetup = field(default_factory=ControllerSetup)
 
 
+def _uniform(x: ArrayLike, dtype: type) -> NDArray | None:
+    """``x`` itself when it is already a compact column (:func:`_compact`) of ``dtype``."""
+    if isinstance(x, np.ndarray) and x.ndim and x.strides[0] == 0 and x.dtype == dtype:
+        return x
+    return None
+
+
 def _column(x: ArrayLike, n: int, name: str, dtype: type) -> NDArray:
-    a: NDArray = np.ascontiguousarray(x, dtype=dtype)
+    a = _uniform(x, dtype)
+    if a is None:
+        a = np.ascontiguousarray(x, dtype=dtype)
     if a.shape != (n,):
         raise ValueError(f"{name} must have shape ({n},), got {a.shape}")
     return a
 
 
 def _points(x: ArrayLike, n: int, name: str) -> NDArray[np.float64]:
-    a = np.ascontiguousarray(x, dtype=np.float64)
+    a = _uniform(x, np.float64)
+    if a is None:
+        a = np.ascontiguousarray(x, dtype=np.float64)
     if a.shape != (n, 3):
         raise ValueError(f"{name} must have shape ({n}, 3), got {a.shape}")
     return a
+
+
+#: Columns this long or longer whose every row is the same are kept as one row (below).
+COMPACT_MIN = 4096
+#: The columns that are often one value over a whole program: arc columns of a program of
+#: lines (NaN), dwell, tolerance, block numbers, tool, path mode.
+COMPACT_COLUMNS = ("center", "normal", "sweep", "block", "tool", "path_mode", "dwell", "tolerance")
+
+
+def _compact(a: NDArray) -> NDArray:
+    """``a``, or when every row equals the first (NaN equal to NaN) a read-only broadcast of
+    a copy of that row: the same values and shape at no memory per move (a million-line
+    raster has no arcs: 56 MB of NaN arc columns otherwise)."""
+    if a.shape[0] < COMPACT_MIN or a.strides[0] == 0:
+        return a
+    first = a[0]
+    same = a == first
+    if a.dtype.kind == "f":
+        same |= np.isnan(a) & np.isnan(first)
+    if not same.all():
+        return a
+    return np.broadcast_to(np.array(first, dtype=a.dtype), a.shape)
 
 
 @dataclass(frozen=True, eq=False)
@@ -249,6 +285,8 @@ class ToolPath:
             if len(files) != len(self.origins):
                 raise ValueError("origin_files must have one entry per origin")
             set_(self, "origin_files", files)
+        for name in COMPACT_COLUMNS:
+            set_(self, name, _compact(getattr(self, name)))
         if self.rotary is not None:
             set_(self, "rotary", _points(self.rotary, n, "rotary"))
         if self.rotary_only is not None:
@@ -274,11 +312,12 @@ class ToolPath:
         "_samples",
     )
 
-    def release_derived(self) -> None:
-        """Forget the derived direction columns (recomputed if asked for again): 120 bytes
-        a move that a finished analysis no longer needs."""
+    def release_derived(self, keep: tuple[str, ...] = ()) -> None:
+        """Forget the derived direction columns but those named in ``keep`` (recomputed if
+        asked for again): 120 bytes a move that a finished analysis no longer needs."""
         for name in self._DERIVED:
-            self.__dict__.pop(name, None)
+            if name not in keep:
+                self.__dict__.pop(name, None)
 
     # ------------------------------------------------------------------ basics
     def __len__(self) -> int:
