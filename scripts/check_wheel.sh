@@ -24,7 +24,8 @@ need = [
     "core/__init__.py", "core/model/presets/siemens-840d.toml",
     "core/model/presets/linuxcnc-sim.toml", "core/py.typed", "adapters/traces/__init__.py",
     "plugins/effects/__init__.py", "examples/zlevel_cavity.ngc", "refvm/__init__.py",
-    "adapters/esprit_com/csharp/NcperfShim.cs",
+    "adapters/esprit_com/csharp/NcperfShim.cs", "adapters/html/viewer.js",
+    "adapters/html/viewer.css", "adapters/html/template.html",
 ]
 missing = [n for n in need if n not in names]
 stray = sorted(n for n in names if n.split("/")[0] in ("tests", "benchmarks", "scripts"))
@@ -47,9 +48,11 @@ run plugins
 run analyze --svg "$WORK/demo.svg"
 run analyze "$EX/fig1_polygons_F4000.ngc" --machine linuxcnc-sim --json "$WORK/a.json" --svg "$WORK/a.svg"
 run profile "$EX/fig3_semicircle_spiral.ngc" --machine linuxcnc-sim --csv "$WORK/trace.csv"
-run compare "$EX/zlevel_cavity.ngc" "$EX/zlevel_cavity_chords.ngc" --svg "$WORK/c.svg"
+run compare "$EX/zlevel_cavity.ngc" "$EX/zlevel_cavity_chords.ngc" --svg "$WORK/c.svg" \
+    --html "$WORK/c.html"
+run analyze --html "$WORK/demo.html"
 run diagnose "$EX/fig3_semicircle_spiral.ngc" "$WORK/trace.csv" --machine linuxcnc-sim \
-    --effects feed_override,servo_lag --json "$WORK/d.json"
+    --effects feed_override,servo_lag --json "$WORK/d.json" --html "$WORK/d.html"
 run profile "$EX/fig1_polygons_F4000.ngc" --machine linuxcnc-sim --csv "$WORK/trace2.csv"
 run calibrate "$EX/fig3_semicircle_spiral.ngc" "$WORK/trace.csv" \
     --also "$EX/fig1_polygons_F4000.ngc" "$WORK/trace2.csv" --machine linuxcnc-sim \
@@ -65,7 +68,7 @@ GOTO/20,20,0
 FINI
 EOF
 run analyze "$WORK/part.apt"
-for f in demo.svg a.json a.svg trace.csv c.svg d.json cal.toml; do
+for f in demo.svg a.json a.svg trace.csv c.svg d.json cal.toml demo.html c.html d.html; do
     [ -s "$WORK/$f" ] || { echo "check_wheel: $f not written"; exit 1; }
 done
 # bad input: one line, exit 1, no traceback

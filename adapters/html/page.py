@@ -413,6 +413,8 @@ def panel_data(
             "worst": round(100.0 * z.worst_reduction),
             "min_feed": z.min_feed * PER_MIN,
             "origin": z.origin,
+            "point": (np.asarray(z.point, dtype=np.float64) - centre).tolist(),
+            "size": z.length,
         }
         for z in ann.zones
     ]
@@ -420,11 +422,13 @@ def panel_data(
         if gap_class is None or np.shape(gap_class) != (n,):
             raise ValueError(f"a diagnosis needs one gap class per move ({n})")
         spec["gclass"] = blobs.add(np.asarray(gap_class, dtype=np.int8))
-        _diagnosis_arrays(blobs, tp, diagnosis, spec)
+        _diagnosis_arrays(blobs, tp, diagnosis, spec, centre)
     return spec
 
 
-def _diagnosis_arrays(blobs: Blobs, tp: ToolPath, d: Diagnosis, spec: dict[str, Any]) -> None:
+def _diagnosis_arrays(
+    blobs: Blobs, tp: ToolPath, d: Diagnosis, spec: dict[str, Any], centre: NDArray[np.float64]
+) -> None:
     """The gap per move, the gap zones and the measured feed over arc length."""
     gap = d.move_gap()
     spec["gap"] = blobs.add(gap.astype(np.float32))
@@ -432,6 +436,9 @@ def _diagnosis_arrays(blobs: Blobs, tp: ToolPath, d: Diagnosis, spec: dict[str, 
     for k, z in enumerate(d.zones, start=1):
         a, b = (int(m) for m in tp.move_at(np.array([z.s_start, z.s_end])))
         lines = f"{z.line_start}" if z.line_start == z.line_end else f"{z.line_start}-{z.line_end}"
+        mid = 0.5 * (z.s_start + z.s_end)
+        k1 = tp.move_at(np.array([mid]))
+        point = tp.points_along(k1, mid - tp.start_s[k1])[0]
         zones.append(
             {
                 "rank": k,
@@ -441,6 +448,8 @@ def _diagnosis_arrays(blobs: Blobs, tp: ToolPath, d: Diagnosis, spec: dict[str, 
                 "time_lost": z.time_s,
                 "cause": f"{z.feature}, RMS gap {z.gap_rms:.0f} mm/min",
                 "program": z.program,
+                "point": (point - centre).tolist(),
+                "size": z.s_end - z.s_start,
             }
         )
     spec["zones"] = zones
@@ -520,7 +529,7 @@ def build(tp: ToolPath, ann: Annotations, target: Any, view: str) -> bytes:
         panels.append(
             panel_data(
                 blobs,
-                tp.source,
+                items[0][0] if items else tp.source,
                 tp,
                 predicted,
                 evaluation=pred.evaluation,
@@ -577,7 +586,7 @@ def build(tp: ToolPath, ann: Annotations, target: Any, view: str) -> bytes:
     if kind == "compare":
         title = f"ncperf compare on {ann.machine}"
     elif kind == "diagnose":
-        title = f"ncperf diagnose: {tp.source}"
+        title = f"ncperf diagnose: {first['label']} on {ann.machine}"
     else:
         title = f"ncperf: {first['label']} on {ann.machine}"
     modes = []

@@ -208,7 +208,9 @@
     this.colours = null;
     this.gl = null;
     try {
-      var opts = { antialias: true, preserveDrawingBuffer: true };
+      // Multisampling costs more than the lines themselves where WebGL runs in software
+      // (SwiftShader: 1M moves at 1-2 s a frame instead of 0.2-0.4 s): large paths go without.
+      var opts = { antialias: prog.nseg < 300000, preserveDrawingBuffer: true };
       this.gl = this.canvas.getContext("webgl", opts) || this.canvas.getContext("experimental-webgl", opts);
     } catch (e) { this.gl = null; }
     if (this.gl) this.initGL(); else this.ctx = this.canvas.getContext("2d");
@@ -418,18 +420,23 @@
       stroke(state.sel.first, state.sel.last, "#00e5ff", 2.5);
     }
     if (this.hover !== undefined && this.hover !== null) stroke(this.hover, this.hover, "rgba(0,0,0,0.7)", 4);
-    var zs = prog.spec.zones || [];
-    ctx.font = "bold 12px sans-serif";
+    // Zone rings: zones within a ring's width of each other share one, labelled "1, 3".
+    var zs = prog.spec.zones || [], rings = [];
     for (var i = 0; i < zs.length && i < 10; i++) {
-      var z = zs[i], m = Math.min(Math.max(z.first, 0), prog.n - 1);
-      var mid = Math.floor((z.first + z.last) / 2), e = prog.last[Math.min(Math.max(mid, 0), prog.n - 1)] * 3;
-      var q = this.project(R, P[e], P[e + 1], P[e + 2]);
+      var z = zs[i], q = this.project(R, z.point[0], z.point[1], z.point[2]), ring = null;
+      for (var r = 0; r < rings.length; r++) {
+        if (Math.abs(rings[r].x - q[0]) < 14 && Math.abs(rings[r].y - q[1]) < 14) { ring = rings[r]; break; }
+      }
+      if (ring) ring.ranks.push(z.rank); else rings.push({ x: q[0], y: q[1], ranks: [z.rank] });
+    }
+    ctx.font = "bold 12px sans-serif";
+    for (r = 0; r < rings.length; r++) {
+      var g = rings[r], label = g.ranks.join(", ");
       ctx.strokeStyle = "#000"; ctx.lineWidth = 1.5;
-      ctx.beginPath(); ctx.arc(q[0], q[1], 7, 0, 2 * Math.PI); ctx.stroke();
+      ctx.beginPath(); ctx.arc(g.x, g.y, 7, 0, 2 * Math.PI); ctx.stroke();
       ctx.lineWidth = 3; ctx.strokeStyle = "#fff";
-      ctx.strokeText(String(z.rank), q[0] + 8, q[1] - 8);
-      ctx.fillStyle = "#000"; ctx.fillText(String(z.rank), q[0] + 8, q[1] - 8);
-      void m;
+      ctx.strokeText(label, g.x + 8, g.y - 8);
+      ctx.fillStyle = "#000"; ctx.fillText(label, g.x + 8, g.y - 8);
     }
   };
 
@@ -641,8 +648,9 @@
     requestAnimationFrame(function () { pending = false; redraw(); });
   }
 
-  function fit(box) {
-    // box: [lo, hi] relative to the centre; fit it in the smallest panel.
+  function fit(box, margin) {
+    // box: [lo, hi] relative to the centre; fit it in the smallest panel, with ``margin``
+    // times its size around it (a zone), at least a fifth of its larger side across.
     var R = rotation(), lo = box[0], hi = box[1];
     var umin = Infinity, umax = -Infinity, vmin = Infinity, vmax = -Infinity;
     for (var c = 0; c < 8; c++) {
@@ -653,6 +661,10 @@
     var w = Infinity, h = Infinity;
     for (var i = 0; i < VIEWS_.length; i++) { VIEWS_[i].size(); w = Math.min(w, VIEWS_[i].w); h = Math.min(h, VIEWS_[i].h); }
     var du = Math.max(umax - umin, 1e-6), dv = Math.max(vmax - vmin, 1e-6);
+    if (margin) {
+      var side = Math.max(du, dv, 0.5);
+      du = Math.max(du, side / 5) * (1 + 2 * margin); dv = Math.max(dv, side / 5) * (1 + 2 * margin);
+    }
     cam.scale = Math.min((w - 40) / du, (h - 40) / dv);
     var cu = (umin + umax) / 2, cv = (vmin + vmax) / 2, cz = (lo[2] + hi[2]) / 2;
     // The point whose screen coordinates are (cu, cv): solve with the depth axis at cz's.
@@ -665,15 +677,6 @@
       var s = PROGRAMS[i].spec;
       for (var k = 0; k < 3; k++) { lo[k] = Math.min(lo[k], s.lo[k]); hi[k] = Math.max(hi[k], s.hi[k]); }
     }
-    return [lo, hi];
-  }
-  function moveBox(prog, a, b) {
-    var P = prog.P, lo = [Infinity, Infinity, Infinity], hi = [-Infinity, -Infinity, -Infinity];
-    for (var v = prog.first[a]; v <= prog.last[b]; v++) {
-      for (var k = 0; k < 3; k++) { var x = P[3 * v + k]; if (x < lo[k]) lo[k] = x; if (x > hi[k]) hi[k] = x; }
-    }
-    var pad = Math.max(hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2], 1) * 0.6;
-    for (k = 0; k < 3; k++) { lo[k] -= pad; hi[k] += pad; }
     return [lo, hi];
   }
   function setView(name) {
@@ -743,16 +746,17 @@
         var bs = body.children;
         for (var k = 0; k < bs.length; k++) bs[k].className = "";
         tr.className = "on";
-        zoomTo(pz[0], z.first, z.last);
+        zoomTo(pz[0], z);
       });
       body.appendChild(tr);
     });
     t.appendChild(body);
   }
-  function zoomTo(pi, a, b) {
-    var prog = PROGRAMS[pi];
-    a = Math.max(0, Math.min(a, prog.n - 1)); b = Math.max(a, Math.min(b, prog.n - 1));
-    fit(moveBox(prog, a, b));
+  // Zoom to a zone: its worst point, with its length around it; select its moves.
+  function zoomTo(pi, z) {
+    var prog = PROGRAMS[pi], h = Math.max(z.size / 2, 0.5), c = z.point;
+    var a = Math.max(0, Math.min(z.first, prog.n - 1)), b = Math.max(a, Math.min(z.last, prog.n - 1));
+    fit([[c[0] - h, c[1] - h, c[2] - h], [c[0] + h, c[1] + h, c[2] + h]], 0.2);
     select(pi, a, b);
     plotAround(pi, a, b, Math.max((prog.s0[b + 1] - prog.s0[a]) * 2, 2));
     schedule();
@@ -908,6 +912,7 @@
       status(fmt(n) + " moves \u00b7 ready in " + fmt((performance.now() - t0) / 1000, 2) + " s \u00b7 " +
         (VIEWS_[0].gl ? "WebGL" : "2-D canvas (no WebGL)") + (notes.length ? " \u00b7 " + notes[0] : ""));
       document.body.dataset.ready = "1";
+      window.ncperf.readyAt = performance.now(); // ms since the navigation started
       window.ncperf.ready = true;
     });
   }
