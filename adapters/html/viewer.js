@@ -583,10 +583,12 @@
     if (b - a > 20000) b = a + 20000;
     var pred = [], feed = [], vmax = 1;
     for (var i = a; i <= b; i++) {
+      // Rapids are left out (a gap in the curve): their speed would set the scale.
+      if (prog.kind[i] === 0) { pred.push(NaN, NaN); continue; }
       speedPoints(prog, i, pred);
       if (prog.kind[i] !== 0) { feed.push(prog.s0[i], prog.feed[i], prog.s0[i + 1], prog.feed[i]); vmax = Math.max(vmax, prog.feed[i]); }
     }
-    for (i = 1; i < pred.length; i += 2) vmax = Math.max(vmax, pred[i]);
+    for (i = 1; i < pred.length; i += 2) if (pred[i] > vmax) vmax = pred[i];
     var meas = [];
     if (prog.measured) {
       for (var t = 0; t < prog.measured.length; t++) {
@@ -611,7 +613,12 @@
     function line(arr, colour, width, dash) {
       ctx.strokeStyle = colour; ctx.lineWidth = width; ctx.setLineDash(dash || []);
       ctx.beginPath();
-      for (var k = 0; k < arr.length; k += 2) { if (k === 0) ctx.moveTo(X(arr[k]), Y(arr[k + 1])); else ctx.lineTo(X(arr[k]), Y(arr[k + 1])); }
+      var up = true;
+      for (var k = 0; k < arr.length; k += 2) {
+        if (arr[k] !== arr[k]) { up = true; continue; } // NaN: a break
+        if (up) ctx.moveTo(X(arr[k]), Y(arr[k + 1])); else ctx.lineTo(X(arr[k]), Y(arr[k + 1]));
+        up = false;
+      }
       ctx.stroke(); ctx.setLineDash([]);
     }
     line(feed, "#999", 1, [4, 3]);
