@@ -112,12 +112,16 @@ class Ncperf:
             ev, profile = pred.evaluation, pred.profile
             assert profile is not None  # setup_for builds a profile (ramps) by default
         else:
-            ev = self.evaluate(tp, machine)
-            # The profile needs the axis shares and the start tangents only: the rest of the
-            # direction columns go before its own peak (1M moves: 72 MB).
+            from core.engine.indicators import combine
+
+            indicators = self.indicators(tp, machine)
+            # What follows (combining, the profile) needs the axis shares and the start
+            # tangents only: the other direction columns go first (1M moves: 72 MB).
             tp.release_derived(keep=("tangent_start", "axis_share"))
+            ev = combine(tp, machine, indicators)
+            del indicators
             say(f"the feed profile of {tp.n:,} moves")
-            profile = build_profile(ev)
+            profile = build_profile(ev, release_directions=True)
         tp.release_derived()  # the models are done with them; the peak is in what follows
         say("zones and colour classes")
         return Analysis(tp, ev, profile, build_annotations(ev, profile))

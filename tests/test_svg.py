@@ -119,7 +119,10 @@ def test_sharp_corner_is_a_class_5_marker(tmp_path):
     radius = min(TIT * math.cos(b / 2) / (1 - math.cos(b / 2)), 10 / (2 * math.sin(b / 2)) - TIT)
     v = (JERK * radius**2) ** (1 / 3)
     assert 1.40 < v < 1.45  # mm/s: 98.6 % below 100 mm/s
-    root = draw(polyline([[0, 0, 0], [10, 0, 0], [10, 10, 0]], 100.0), FileTarget(tmp_path / "c.svg", colour="paper"))
+    root = draw(
+        polyline([[0, 0, 0], [10, 0, 0], [10, 10, 0]], 100.0),
+        FileTarget(tmp_path / "c.svg", colour="paper"),
+    )
     red = titled(root, "circle", "fill", COLOURS[5])
     assert red == [
         f"line 1/2: -{round(100 * (1 - v / 100))} % (tangential: jerk X), {round(v * 60)} mm/min"

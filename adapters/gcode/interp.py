@@ -131,6 +131,13 @@ class State:
 class Interpreter:
     """Turns the words of one program into a ToolPath (see module docstring)."""
 
+    #: per G-code group and line, its code x 10 (-1: none); after :meth:`_release_words`
+    #: only the rows the columns read, indexed by group all the same
+    g: Any
+    #: per letter, its value on each line (NaN: absent) and whether it is there
+    vals: dict[str, Any]
+    pres: dict[str, Any]
+
     def __init__(
         self,
         src: Source,
@@ -196,7 +203,25 @@ class Interpreter:
         self._modal()
         self._axes()
         self._check_words()
+        self._release_words()
         return self._build()
+
+    def _release_words(self) -> None:
+        """Let the word arrays go (1M lines: 50 MB) before the columns are built: what
+        follows reads the per-line arrays. The decimal-point notice is worked out now and
+        added where it always was (the notices keep their order)."""
+        self._bare_notice = self._decimal_point_args() if self.dialect == "fanuc" else None
+        w = self.w
+        w.line, w.letter = w.line[:0], w.letter[:0]
+        w.value, w.bare = w.value[:0], w.bare[:0]
+        del self.li
+        # So do the per-line values the positions were made of, and the G-code groups but
+        # the two the columns read (1M lines: another 70 MB).
+        for ch in "XYZQ":
+            self.vals.pop(ch, None)
+            self.pres.pop(ch, None)
+        keep = (W.Group.PATH_MODE, W.Group.EXACT_STOP_BLOCK)
+        self.g = {grp: self.g[grp].copy() for grp in keep}
 
     def chunk(self) -> tuple[dict | None, State]:
         """A run of plain lines from :attr:`initial`: the moves' columns (program
@@ -410,8 +435,16 @@ class Interpreter:
                 "G70: feeds taken in mm/min (the basic system is assumed metric)",
                 int(self.al[np.argmax(gg[G.UNITS] == 700)]),
             )
-        self.scale = np.where(geom_inch, INCH, 1.0)
-        self.feed_scale = np.where(feed_inch, INCH, 1.0) / 60.0  # -> mm/s
+        # One value over the program (no inch lines) is a broadcast: no memory per line.
+        na_shape = (na,)
+        self.scale = (
+            np.where(geom_inch, INCH, 1.0) if geom_inch.any() else np.broadcast_to(1.0, na_shape)
+        )
+        self.feed_scale = (  # -> mm/s
+            np.where(feed_inch, INCH, 1.0) / 60.0
+            if feed_inch.any()
+            else np.broadcast_to(1.0 / 60.0, na_shape)
+        )
         self.any_inch = bool(geom_inch.any())
 
     def _axes(self) -> None:
@@ -426,7 +459,7 @@ class Interpreter:
         self.vals, self.pres = vals, pres
 
         dwell_line = gg[G.DWELL] >= 0
-        self.dwell_time = np.zeros(self.na)
+        self.dwell_time = np.broadcast_to(0.0, (self.na,))  # read only; _dwells sets it
         self.consumed = {ch: np.zeros(self.na, dtype=bool) for ch in "XPF"}
         if dwell_line.any():
             self._dwells(dwell_line)
@@ -603,8 +636,8 @@ class Interpreter:
             )
         cols["op_offsets"] = offs
 
-        if self.dialect == "fanuc":
-            self._decimal_point_notice()
+        if self._bare_notice is not None:
+            self.notes.add(*self._bare_notice)
 
         tp = ToolPath(
             **cols,
@@ -826,18 +859,20 @@ class Interpreter:
         sign = np.where(ccw, 1.0, -1.0) * np.sign(r)
         return s + chord / 2 + (sign * h)[:, None] * left
 
-    def _decimal_point_notice(self) -> None:
+    def _decimal_point_args(self) -> tuple[str, int, int] | None:
+        """The notice (message, line, count) of dimension words without a decimal point."""
         w = self.w
         sel = w.bare
-        if sel.any():
-            k = int(np.argmax(sel))
-            self.notes.add(
-                f"{chr(w.letter[k])}{w.value[k]:g} has no decimal point: read as "
-                f"{w.value[k]:g} (calculator-type input); a Fanuc control without it reads "
-                "the least input increment (e.g. 0.001 mm)",
-                int(w.line[k]),
-                int(sel.sum()),
-            )
+        if not sel.any():
+            return None
+        k = int(np.argmax(sel))
+        return (
+            f"{chr(w.letter[k])}{w.value[k]:g} has no decimal point: read as "
+            f"{w.value[k]:g} (calculator-type input); a Fanuc control without it reads "
+            "the least input increment (e.g. 0.001 mm)",
+            int(w.line[k]),
+            int(sel.sum()),
+        )
 
 
 def _no_moves(src: Source) -> InputError:

@@ -282,7 +282,9 @@ def _cell_key(q: NDArray[np.int64], cell: int) -> NDArray[np.int64]:
     """One int64 per (x, y) cell of ``cell`` quantisation units."""
     c = q // cell
     # The plot is at most ~2e4 units high, far below 2**31: no collisions.
-    return (c[:, 0] << 31) + c[:, 1]
+    key = c[:, 0] << 31
+    key += c[:, 1]
+    return key
 
 
 def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
@@ -347,7 +349,13 @@ def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
         local = np.arange(samples.shape[0]) - np.repeat(np.cumsum(per) - per, per)
         inner = (local > 0) & (local < np.repeat(counts, per))
         pts[np.repeat(first[arcs], per)[inner] + local[inner]] = samples[inner]
-    q = np.rint(frame.to_px(pts) * Q).astype(np.int64)
+    # (in place: the same numbers, two (m, 2) temporaries fewer)
+    px = frame.to_px(pts)
+    del pts, uv_s, uv_e, samples
+    px *= Q
+    np.rint(px, out=px)
+    q = px.astype(np.int64)
+    del px
 
     breaks = np.ones(n, dtype=bool)
     if n > 1:

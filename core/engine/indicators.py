@@ -208,15 +208,19 @@ def _blend_block_time(
         ok = travel > 0
         if not ok.any():
             continue
+        if ok.all():  # every corner has an arc: share the arrays, no copies
+            index = ind.index
+        else:
+            index, hold, travel = ind.index[ok], hold[ok], travel[ok]
         out.append(
             Indicator(
                 name=BLEND_INDICATOR,
                 at="junction",
-                index=ind.index[ok],
-                feed=2.0 * travel[ok] / machine.interpolation_time,
-                limit=np.zeros(int(ok.sum()), dtype=np.int64),
+                index=index,
+                feed=2.0 * travel / machine.interpolation_time,
+                limit=np.zeros(index.size, dtype=np.int64),
                 labels=(BLEND_LABEL,),
-                values={"hold_mm": hold[ok], "travel_mm": travel[ok]},
+                values={"hold_mm": hold, "travel_mm": travel},
             )
         )
     return out
@@ -227,7 +231,7 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     tp = toolpath
     names: list[str] = []
     label_id: dict[str, int] = {PROGRAMMED: 0}
-    parts: dict[str, list[tuple[NDArray, NDArray, NDArray, NDArray, NDArray]]] = {
+    parts: dict[str, list[tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]]] = {
         "junction": [],
         "element": [],
     }
@@ -244,17 +248,13 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         bound = tp.n - 1 if ind.at == "junction" else tp.n
         if ind.index.size and (ind.index.min() < 0 or ind.index.max() >= bound):
             raise ValueError(f"indicator {ind.name!r}: {ind.at} index out of range 0..{bound - 1}")
-        hold = np.asarray(ind.values.get("hold_mm", np.zeros(ind.index.size)), dtype=np.float64)
+        # Columns of one value are broadcasts (no memory per record): 1M junctions, 24 MB
+        # less per indicator.
+        none = np.broadcast_to(0.0, ind.index.shape)
+        hold = np.asarray(ind.values.get("hold_mm", none), dtype=np.float64)
         travel = np.asarray(ind.values.get("travel_mm", hold), dtype=np.float64)
-        parts[ind.at].append(
-            (
-                ind.index,
-                ind.feed,
-                np.full(ind.index.size, nid, dtype=np.int64),
-                limit,
-                np.stack([hold, travel]),
-            )
-        )
+        nids = np.broadcast_to(np.int64(nid), ind.index.shape)
+        parts[ind.at].append((ind.index, ind.feed, nids, limit, hold, travel))
 
     def lowest(kind: str) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
         # Dense passes over the junctions (or elements), no sort: the first indicator to
@@ -265,15 +265,16 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         ind = np.full(size, -1, dtype=np.int64)
         lim = np.zeros(size, dtype=np.int64)
         hold = np.zeros((2, size))
-        for idx, f, i, lab, h in parts[kind]:
+        for idx, f, i, lab, h, t in parts[kind]:
             new = ind[idx] < 0
             sel = idx[new]
-            feed[sel], ind[sel], lim[sel], hold[:, sel] = f[new], i[new], lab[new], h[:, new]
-        for idx, f, i, lab, h in parts[kind]:
+            feed[sel], ind[sel], lim[sel] = f[new], i[new], lab[new]
+            hold[0, sel], hold[1, sel] = h[new], t[new]
+        for idx, f, i, lab, h, t in parts[kind]:
             better = f < feed[idx]
             sel = idx[better]
             feed[sel], ind[sel], lim[sel] = f[better], i[better], lab[better]
-            hold[:, sel] = h[:, better]
+            hold[0, sel], hold[1, sel] = h[better], t[better]
         where = np.flatnonzero(ind >= 0)
         return where, feed[where], ind[where], lim[where], hold[:, where]
 

@@ -240,24 +240,33 @@ class Profile:
     def phases(self) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
         """(n,) arrays of each move's acceleration time, braking time (s), acceleration
         length, braking length and cruise length (mm), between its holds."""
-        v0, v1, vp = self.v_entry, self.v_exit, self.v_peak
-        au, ad = self.a_up, self.a_down
+        return self.phases_of(slice(None))
+
+    def phases_of(
+        self, k: NDArray[np.int64] | slice
+    ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        """:attr:`phases` of the moves ``k`` only (the same arithmetic, no (n,) arrays)."""
+        v0, v1, vp = self.v_entry[k], self.v_exit[k], self.v_peak[k]
+        au, ad = self.a_up[k], self.a_down[k]
         t_up = (vp - v0) / au
         t_dn = (vp - v1) / ad
         d_up = (vp**2 - v0**2) / (2 * au)
         d_dn = (vp**2 - v1**2) / (2 * ad)
-        inner = self.toolpath.length - self.hold_start - self.hold_end
+        inner = self.toolpath.length[k] - self.hold_start[k] - self.hold_end[k]
         d_cr = np.maximum(inner - d_up - d_dn, 0.0)
         return t_up, t_dn, d_up, d_dn, d_cr
 
     @cached_property
     def hold_times(self) -> tuple[NDArray, NDArray]:
         """(n,) time (s) each move spends in its start hold and in its end hold."""
+        return self.hold_times_of(slice(None))
+
+    def hold_times_of(self, k: NDArray[np.int64] | slice) -> tuple[NDArray, NDArray]:
+        """:attr:`hold_times` of the moves ``k`` only."""
+        hs, he = self.hold_start[k], self.hold_end[k]
         with np.errstate(divide="ignore", invalid="ignore"):
-            h0 = np.where(
-                self.hold_start > 0, self.hold_start_ratio * self.hold_start / self.v_entry, 0.0
-            )
-            h1 = np.where(self.hold_end > 0, self.hold_end_ratio * self.hold_end / self.v_exit, 0.0)
+            h0 = np.where(hs > 0, self.hold_start_ratio[k] * hs / self.v_entry[k], 0.0)
+            h1 = np.where(he > 0, self.hold_end_ratio[k] * he / self.v_exit[k], 0.0)
         return np.nan_to_num(h0, posinf=0.0), np.nan_to_num(h1, posinf=0.0)
 
     @cached_property
@@ -566,6 +575,7 @@ def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds
         den = 1.0 / a_up
         den += 1.0 / a_dn
         peak /= den
+        del den  # (each temporary goes once spent: 1M moves, the profile's peak)
     np.maximum(peak, 0.0, out=peak)
     np.sqrt(peak, out=peak)
     np.minimum(cap, peak, out=peak)
@@ -577,15 +587,19 @@ def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds
     pk2 = peak * peak
     # d_cr = max(L - (peak^2 - v0^2) / (2 a_up) - (peak^2 - v1^2) / (2 a_dn), 0)
     up = pk2 - v0sq
+    del v0sq
     up /= 2 * a_up
     d_cr = length - up
     np.subtract(pk2, v1sq, out=up)
+    del pk2, v1sq
     up /= 2 * a_dn
     d_cr -= up
+    del up
     np.maximum(d_cr, 0.0, out=d_cr)
     with np.errstate(divide="ignore", invalid="ignore"):
         t_cr = np.where(peak > 0, d_cr / peak, 0.0)
     t += t_cr
+    del t_cr
     t += t_dn
     t += t_hold
     return v0, peak, v1, t, d_cr
@@ -649,7 +663,7 @@ def _damped(a: NDArray, new: NDArray, last: NDArray) -> tuple[NDArray, NDArray]:
     step = np.sign(new - a)
     back = step * last < 0
     out = np.where(back, np.sqrt(a * new), new)
-    return out, np.sign(out - a)
+    return out, np.sign(out - a).astype(np.int8)  # -1, 0, 1: one byte a move
 
 
 def build_profile(
@@ -659,6 +673,7 @@ def build_profile(
     lookahead: int | None = None,
     end_factor: float = 1.0,
     arc_factor: float = 1.0,
+    release_directions: bool = False,
 ) -> Profile:
     """The predicted feed profile of an evaluated tool path (see the module docstring).
 
@@ -671,6 +686,10 @@ def build_profile(
         Share of the tangential acceleration used on the program's last block.
     arc_factor : float
         Share of the tangential acceleration used on programmed arcs.
+    release_directions : bool
+        Forget the tool path's direction columns once read (:meth:`ToolPath.release_derived`;
+        recomputed if asked for again): for a single analysis, 48 bytes a move off the
+        peak; not for fits that build many profiles of one path.
     """
     tp = ev.toolpath
     m = ev.machine
@@ -690,14 +709,16 @@ def build_profile(
         acc = np.where(tp.is_arc, acc * arc_factor, acc)
     if end_factor != 1.0 and tp.n:
         acc[-1] *= end_factor
+    if release_directions:
+        tp.release_derived()
     b = boundary_caps(ev, cap, pause)
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
     holds = _Holds(length, h_start, h_end, r_start, r_end)
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
     a_up, a_dn = acc.copy(), acc.copy()
-    step_up = np.zeros(tp.n)
-    step_dn = np.zeros(tp.n)
+    step_up = np.zeros(tp.n, dtype=np.int8)
+    step_dn = np.zeros(tp.n, dtype=np.int8)
     for r in range(max(rounds, 1)):
         v = _passes(caps, holds.inner, a_up, a_dn)
         v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
@@ -705,8 +726,12 @@ def build_profile(
             break
         up, dv_up, _ = _ramp_changes(v0, peak, v1, d_cr, rising=True)
         dn, dv_dn, _ = _ramp_changes(v0, peak, v1, d_cr, rising=False)
+        # This round's speeds are spent: free them before the next round makes its own
+        # (1M moves: 40 MB off the profile's peak).
+        del v, v0, peak, v1, time, d_cr
         new_up = _ramp_acceleration(up, dv_up, acc, jerk)
         new_dn = _ramp_acceleration(dn, dv_dn, acc, jerk)
+        del up, dv_up, dn, dv_dn
         # Where a move's A_eff turns back (a staircase of falling caps: small steps give a low
         # A_eff, which holds the speed under the caps, which gives one long ramp and a high
         # A_eff, ...), take the geometric mean of the last two: the rounds then close in on

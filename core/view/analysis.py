@@ -12,10 +12,14 @@ import numpy as np
 
 from core.engine.indicators import Evaluation
 from core.engine.profile import Profile
+from core.model import geometry as g
 from core.model.errors import InputError
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.view.annotations import Annotations
+
+#: Moves per piece where a headline figure is computed in pieces (bounded temporaries).
+PIECE = 262_144
 
 
 @dataclass(frozen=True, eq=False)
@@ -32,27 +36,33 @@ class Analysis:
 def rapid_time(an: Analysis) -> float:
     """Rapids at the axes' max feed (s)."""
     tp = an.toolpath
-    r = ~tp.is_feed
-    if not r.any():
+    r = np.flatnonzero(~tp.is_feed)
+    if not r.size:
         return 0.0
-    v = an.evaluation.machine.rapid_speed(tp.tangent_start[r])
+    # Rapids are lines: their direction is the chord's (the rows ToolPath.tangent_start
+    # would give them, without building it for every move).
+    v = an.evaluation.machine.rapid_speed(g.unit(tp.end[r] - tp.start[r]))
     return float(np.sum(tp.length[r] / v))
 
 
 def at_feed_share(profile: Profile, fraction: float = 0.9) -> float:
     """Share of the feed length run at ``fraction`` of the programmed feed or more."""
     tp = profile.toolpath
-    f = tp.is_feed
-    if not f.any():
+    feed = np.flatnonzero(tp.is_feed)
+    if not feed.size:
         return 0.0
-    thr = fraction * tp.feed[f]
-    v0, v1, vp = profile.v_entry[f], profile.v_exit[f], profile.v_peak[f]
-    up = np.maximum((thr**2 - v0**2) / (2 * profile.a_up[f]), 0.0)
-    down = np.maximum((thr**2 - v1**2) / (2 * profile.a_down[f]), 0.0)
-    holds = profile.hold_start[f] + profile.hold_end[f]  # run at the (slower) boundary speeds
-    reaches = vp >= thr * (1 - TOL.float_slack)
-    fast = np.where(reaches, np.maximum(tp.length[f] - holds - up - down, 0.0), 0.0)
-    return float(fast.sum() / tp.length[f].sum())
+    length = tp.length
+    fast = np.empty(feed.size)
+    for a in range(0, feed.size, PIECE):  # in pieces: bounded temporaries, the same numbers
+        f = feed[a : a + PIECE]
+        thr = fraction * tp.feed[f]
+        v0, v1, vp = profile.v_entry[f], profile.v_exit[f], profile.v_peak[f]
+        up = np.maximum((thr**2 - v0**2) / (2 * profile.a_up[f]), 0.0)
+        down = np.maximum((thr**2 - v1**2) / (2 * profile.a_down[f]), 0.0)
+        holds = profile.hold_start[f] + profile.hold_end[f]  # run at the boundary speeds
+        reaches = vp >= thr * (1 - TOL.float_slack)
+        fast[a : a + PIECE] = np.where(reaches, np.maximum(length[f] - holds - up - down, 0.0), 0.0)
+    return float(fast.sum() / length[feed].sum())
 
 
 def totals(an: Analysis) -> dict[str, float | int]:

@@ -123,6 +123,7 @@ def build_annotations(
     tp = ev.toolpath
     if profile is None:
         profile = build_profile(ev)
+    worst = find_zones(ev, profile, zones)  # first: its peak is the stage's (1M moves)
     mc = np.where(tp.is_feed, reduction_class(np.nan_to_num(ev.element_reduction)), -1)
     share = speed_share(profile)
     sc = np.where(tp.is_feed, reduction_class(1.0 - np.nan_to_num(share, nan=1.0)), -1)
@@ -142,7 +143,7 @@ def build_annotations(
         junction_cause=ev.junction_indicator,
         junction_limit=ev.junction_limit,
         length_class=length_class(ev),
-        zones=find_zones(ev, profile, zones),
+        zones=worst,
         indicator_names=ev.indicator_names,
         indicator_counts=tuple(counts),
         labels=ev.labels,

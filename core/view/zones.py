@@ -6,6 +6,7 @@ from __future__ import annotations
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from core.engine.indicators import Evaluation
 from core.engine.profile import Profile
@@ -106,32 +107,39 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     if tp.n == 0:
         return () if count is not None else 0
     feed = tp.is_feed
-    t_up, t_dn, d_up, d_dn, _ = profile.phases
-    th0, th1 = profile.hold_times
-    # The holds at a move's ends (inserted arcs) belong with its acceleration and braking.
-    d_up = d_up + profile.hold_start
-    d_dn = d_dn + profile.hold_end
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(invalid="ignore"):
         fast = ~feed | (profile.v_peak >= (1.0 - ZONE_THRESHOLD) * tp.feed)
-        lost_up = np.where(feed, t_up + th0 - d_up / tp.feed, 0.0)
-        lost_dn = np.where(feed, t_dn + th1 - d_dn / tp.feed, 0.0)
     brk = np.flatnonzero(fast)
     n_z = brk.size + 1
-    # Zone of each move: zone m lies between break m-1 and break m.
-    zone_of = np.searchsorted(brk, np.arange(tp.n), side="left")
+    # The phases of the breaks only (no (n,) arrays): their accelerating start and braking end.
+    t_up, t_dn, d_up, d_dn, _ = profile.phases_of(brk)
+    th0, th1 = profile.hold_times_of(brk)
+    # The holds at a move's ends (inserted arcs) belong with its acceleration and braking.
+    d_up = d_up + profile.hold_start[brk]
+    d_dn = d_dn + profile.hold_end[brk]
+    f_brk, feed_brk = tp.feed[brk], feed[brk]
+    with np.errstate(invalid="ignore", divide="ignore"):
+        lost_up = np.where(feed_brk, t_up + th0 - d_up / f_brk, 0.0)
+        lost_dn = np.where(feed_brk, t_dn + th1 - d_dn / f_brk, 0.0)
+    # Zone of each move: zone m lies between break m-1 and break m (the breaks before it).
+    zone_of: NDArray[np.int64] = np.cumsum(fast) - fast
     inner = ~fast
     # float64 whatever the count: a bincount over no moves is int64, and np.add.at below
     # would truncate every lone corner's fractions into it
-    lost = np.bincount(zone_of[inner], weights=profile.lost_time[inner], minlength=n_z)
-    lost = lost.astype(np.float64, copy=False)
-    length = np.bincount(zone_of[inner], weights=tp.length[inner], minlength=n_z)
-    length = length.astype(np.float64, copy=False)
+    # (inner moves are feed moves: Profile.lost_time of them, without its (n,) array)
+    ii = np.flatnonzero(inner)
+    zi, len_i = zone_of[ii], tp.length[ii]
+    with np.errstate(invalid="ignore"):
+        lost_i = profile.time[ii] - len_i / tp.feed[ii]
+    lost = np.bincount(zi, weights=lost_i, minlength=n_z).astype(np.float64, copy=False)
+    length = np.bincount(zi, weights=len_i, minlength=n_z).astype(np.float64, copy=False)
+    del ii, zi, len_i, lost_i, inner
     # Breaks: their accelerating start ends zone m, their braking end opens zone m + 1.
     m = np.arange(brk.size)
-    np.add.at(lost, m, lost_up[brk])
-    np.add.at(lost, m + 1, lost_dn[brk])
-    np.add.at(length, m, np.where(feed[brk], d_up[brk], 0.0))
-    np.add.at(length, m + 1, np.where(feed[brk], d_dn[brk], 0.0))
+    np.add.at(lost, m, lost_up)
+    np.add.at(lost, m + 1, lost_dn)
+    np.add.at(length, m, np.where(feed_brk, d_up, 0.0))
+    np.add.at(length, m + 1, np.where(feed_brk, d_dn, 0.0))
     # Move range of each zone: from the break before to the break after (where they brake
     # or accelerate), clipped to the program.
     first = np.concatenate([[0], brk])
@@ -143,6 +151,7 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     j_zone = np.where(fast[jm], zone_of[jm] + 1, zone_of[jm])
     esel = np.flatnonzero(feed & (np.nan_to_num(ev.element_reduction) >= ZONE_THRESHOLD))
     e_zone = zone_of[esel] + fast[esel]
+    del zone_of, jm  # the sort below is the peak
     ratio = np.concatenate(
         [
             ev.junction_feed[jsel] / ev.junction_programmed[jsel],
@@ -150,9 +159,10 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
         ]
     )
     pt_zone = np.concatenate([j_zone, e_zone])
-    is_j = np.arange(ratio.size) < jsel.size
+    n_js = jsel.size  # points [0, n_js) are junctions, the rest blocks
     points = np.bincount(pt_zone, minlength=n_z)
-    n_j = np.bincount(pt_zone[is_j], minlength=n_z)
+    n_j = np.bincount(j_zone, minlength=n_z)
+    del j_zone, e_zone
     # The worst point of each zone: sort by (zone, ratio), take the first of each zone.
     order = np.lexsort((ratio, pt_zone))
     worst = np.full(n_z, -1, dtype=np.int64)
@@ -168,7 +178,7 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     zones = []
     for rank, z in enumerate(top, start=1):
         k = int(worst[z])
-        if is_j[k]:
+        if k < n_js:
             q = int(jsel[k])
             cause = (
                 f"{ev.indicator_names[ev.junction_indicator[q]]}: {ev.labels[ev.junction_limit[q]]}"
