@@ -97,6 +97,34 @@ def detect_dialect(path: str, words: Words) -> str:
     return "fanuc"
 
 
+#: The interpreter's per-line arrays (attributes), let go once the columns are built.
+_PER_LINE = (
+    "g",
+    "vals",
+    "pres",
+    "pos",
+    "known",
+    "kind",
+    "arc",
+    "is_move",
+    "motion",
+    "plane",
+    "distance",
+    "arc_distance",
+    "units",
+    "path_mode",
+    "scale",
+    "feed_scale",
+    "dwell_time",
+    "consumed",
+    "m_stop",
+    "m_tool",
+    "has_m",
+    "g_pass_line",
+    "home",
+)
+
+
 def _ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> NDArray:
     """Forward-fill ``values`` from the positions where ``is_set``; ``initial`` before the first."""
     if not is_set.any():
@@ -330,7 +358,8 @@ class Interpreter:
         table = W.TABLES[self.dialect]
         gi = np.flatnonzero(w.letter == ord("G"))
         v = w.value[gi]
-        code = np.rint(v * 10).astype(np.int64)
+        with np.errstate(invalid="ignore", over="ignore"):  # G1e308: "unknown G-code" below
+            code = np.rint(v * 10).astype(np.int64)
         group = np.full(gi.size, -1, dtype=np.int64)
         for c in np.unique(code):
             sel = code == c
@@ -639,15 +668,22 @@ class Interpreter:
         if self._bare_notice is not None:
             self.notes.add(*self._bare_notice)
 
+        # The per-line arrays are spent: they go before the tool path is checked and its
+        # zero-length moves dropped (the reader's peak; 1M lines, 100 MB).
+        for name in _PER_LINE:
+            self.__dict__.pop(name, None)
         tp = ToolPath(
             **cols,
             op_names=tuple(names),
             source=self.src.name,
             units="inch" if self.any_inch else "mm",
         )
+        del cols  # (columns of one value are now broadcasts: the full ones go)
+        lines = tp.line
         tp, removed = drop_zero_length(tp)
         if removed.size:
-            self.notes.add(POINTS_DROPPED, int(cols["line"][removed[0]] - 1), int(removed.size))
+            self.notes.add(POINTS_DROPPED, int(lines[removed[0]] - 1), int(removed.size))
+        del lines
         if tp.n == 0:
             raise _no_moves(self.src)
         return dataclasses.replace(tp, notices=self.notes.notices())
@@ -714,6 +750,7 @@ class Interpreter:
         if nofeed.any():
             raise self.error(al[mi[np.argmax(nofeed)]], "feed move without a feed rate F")
         cols["feed"] = np.where(feedmove, feed, np.nan)
+        del feed_line, feed, kind  # (the reader's peak is in what follows: 1M lines, 24 MB)
 
         self._arcs(cols, mi)
 

@@ -280,10 +280,10 @@ class Strokes:
 
 def _cell_key(q: NDArray[np.int64], cell: int) -> NDArray[np.int64]:
     """One int64 per (x, y) cell of ``cell`` quantisation units."""
-    c = q // cell
     # The plot is at most ~2e4 units high, far below 2**31: no collisions.
-    key = c[:, 0] << 31
-    key += c[:, 1]
+    key = q[:, 0] // cell
+    key <<= 31
+    key += q[:, 1] // cell
     return key
 
 
@@ -377,6 +377,10 @@ def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
 
 
 # ---------------------------------------------------------------- text output
+#: Values written per piece by :func:`render_ints`.
+INT_PIECE = 262_144
+
+
 def render_ints(values: ArrayLike, suffix: ArrayLike, table: Sequence[bytes]) -> bytes:
     """Write integers in decimal, each followed by a piece of text, without a Python loop.
 
@@ -399,6 +403,13 @@ def render_ints(values: ArrayLike, suffix: ArrayLike, table: Sequence[bytes]) ->
         raise ValueError(f"values and suffix must have one shape (t,), got {v.shape}, {sfx.shape}")
     if v.size == 0:
         return b""
+    if v.size > INT_PIECE:
+        # Each value is written on its own: in pieces, the (t, digits) temporaries stay small
+        # and the bytes are the same.
+        return b"".join(
+            render_ints(v[a : a + INT_PIECE], sfx[a : a + INT_PIECE], table)
+            for a in range(0, v.size, INT_PIECE)
+        )
     neg = v < 0
     av = np.abs(v)
     width = len(str(int(av.max())))

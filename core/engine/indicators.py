@@ -108,6 +108,10 @@ class Indicator:
 #: rather than the facade, so that it does not depend on the plugin manager.
 IndicatorSource = Callable[[ToolPath, Machine], list[Indicator]]
 
+#: Dtype of the indicator and limit codes of an evaluation: indices into its short tables of
+#: names and labels (two bytes a move, not eight: a million moves, 24 MB).
+CODE = np.int16
+
 
 @dataclass(frozen=True, eq=False)
 class Evaluation:
@@ -146,11 +150,11 @@ class Evaluation:
     junction: NDArray[np.int64]
     junction_programmed: NDArray[np.float64]
     junction_feed: NDArray[np.float64]
-    junction_indicator: NDArray[np.int64]
-    junction_limit: NDArray[np.int64]
+    junction_indicator: NDArray[np.int16]
+    junction_limit: NDArray[np.int16]
     element_feed: NDArray[np.float64]
-    element_indicator: NDArray[np.int64]
-    element_limit: NDArray[np.int64]
+    element_indicator: NDArray[np.int16]
+    element_limit: NDArray[np.int16]
     min_length: NDArray[np.float64]
     junction_hold: NDArray[np.float64]
     junction_travel: NDArray[np.float64]
@@ -242,9 +246,9 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
             names.append(ind.name)
         nid = names.index(ind.name)
         codes = np.array(
-            [label_id.setdefault(lab, len(label_id)) for lab in ind.labels], dtype=np.int64
+            [label_id.setdefault(lab, len(label_id)) for lab in ind.labels], dtype=CODE
         )
-        limit = codes[ind.limit] if ind.index.size else np.zeros(0, dtype=np.int64)
+        limit = codes[ind.limit] if ind.index.size else np.zeros(0, dtype=CODE)
         bound = tp.n - 1 if ind.at == "junction" else tp.n
         if ind.index.size and (ind.index.min() < 0 or ind.index.max() >= bound):
             raise ValueError(f"indicator {ind.name!r}: {ind.at} index out of range 0..{bound - 1}")
@@ -253,7 +257,7 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         none = np.broadcast_to(0.0, ind.index.shape)
         hold = np.asarray(ind.values.get("hold_mm", none), dtype=np.float64)
         travel = np.asarray(ind.values.get("travel_mm", hold), dtype=np.float64)
-        nids = np.broadcast_to(np.int64(nid), ind.index.shape)
+        nids = np.broadcast_to(CODE(nid), ind.index.shape)
         parts[ind.at].append((ind.index, ind.feed, nids, limit, hold, travel))
 
     def lowest(kind: str) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
@@ -262,8 +266,8 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         # indicator), then any lower feed takes it over; ties keep the earlier indicator.
         size = max(tp.n - 1, 0) if kind == "junction" else tp.n
         feed = np.full(size, np.inf)
-        ind = np.full(size, -1, dtype=np.int64)
-        lim = np.zeros(size, dtype=np.int64)
+        ind = np.full(size, -1, dtype=CODE)
+        lim = np.zeros(size, dtype=CODE)
         hold = np.zeros((2, size))
         for idx, f, i, lab, h, t in parts[kind]:
             new = ind[idx] < 0
@@ -285,8 +289,8 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     jfeed = np.fmin(jfeed, jprog)
 
     efeed = tp.feed.copy()
-    eind = np.full(tp.n, -1, dtype=np.int64)
-    elim = np.full(tp.n, -1, dtype=np.int64)
+    eind = np.full(tp.n, -1, dtype=CODE)
+    elim = np.full(tp.n, -1, dtype=CODE)
     e, ef, ei, el, _ = lowest("element")
     below = ef < efeed[e]
     efeed[e[below]] = ef[below]

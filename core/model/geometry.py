@@ -128,8 +128,10 @@ def arc_pitch(
     normal: NDArray[np.float64],
     sweep: NDArray[np.float64],
 ) -> NDArray[np.float64]:
-    """Helix rise per radian along the normal (mm/rad); 0 for planar arcs."""
-    return dot(end - start, normal) / sweep
+    """Helix rise per radian along the normal (mm/rad); 0 for planar arcs (NaN where the
+    sweep is 0: no arc)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        return dot(end - start, normal) / sweep
 
 
 def arc_length(
