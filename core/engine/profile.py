@@ -103,7 +103,14 @@ def s_curve(
     as for the straight line g = p, G = p^2 / 2 of an infinite jerk: same duration and
     distance, only the shape differs).
     """
-    p = np.clip(np.asarray(p, dtype=np.float64), 0.0, 1.0)
+    shape = s_curve_shape(dv, acc, jerk)
+    return s_curve_g(p, shape), s_curve_big_g(p, shape)
+
+
+def s_curve_shape(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> tuple[NDArray, ...]:
+    """What :func:`s_curve` needs of a speed change that does not depend on ``p``: the ramp
+    share r, 1 / (1 - r) and r kept off zero (computed once for the many ``p`` a bisection
+    tries)."""
     dv = np.asarray(dv, dtype=np.float64)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         a_p = np.minimum(acc, np.sqrt(dv * jerk))
@@ -113,12 +120,27 @@ def s_curve(
     r = np.clip(np.nan_to_num(r), 0.0, 0.5)
     c = 1.0 / (1.0 - r)
     rs = np.maximum(r, TOL.tiny)
+    return r, c, rs
+
+
+def s_curve_g(p: ArrayLike, shape: tuple[NDArray, ...]) -> NDArray[np.float64]:
+    """The share g of :func:`s_curve` at ``p`` for a :func:`s_curve_shape`."""
+    r, c, rs = shape
+    p = np.clip(np.asarray(p, dtype=np.float64), 0.0, 1.0)
     q = 1.0 - p
     first, last = p < r, p > 1.0 - r
-    g = np.where(
+    return np.where(
         first, c * p * p / (2 * rs), np.where(last, 1.0 - c * q * q / (2 * rs), c * (p - 0.5 * r))
     )
-    big_g = np.where(
+
+
+def s_curve_big_g(p: ArrayLike, shape: tuple[NDArray, ...]) -> NDArray[np.float64]:
+    """The integral G of :func:`s_curve` at ``p`` for a :func:`s_curve_shape`."""
+    r, c, rs = shape
+    p = np.clip(np.asarray(p, dtype=np.float64), 0.0, 1.0)
+    q = 1.0 - p
+    first, last = p < r, p > 1.0 - r
+    return np.where(
         first,
         c * p**3 / (6 * rs),
         np.where(
@@ -127,7 +149,6 @@ def s_curve(
             c * r * r / 6 + c * (0.5 * (p * p - r * r) - 0.5 * r * (p - r)),
         ),
     )
-    return g, big_g
 
 
 def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -313,11 +334,13 @@ class Profile:
             vb = self.v_entry[kk] if rising else self.v_exit[kk]
             target = into[sel] if rising else rest[sel]
             span = dv * dv / a  # dv * T, T = dv / a the ramp's duration
+            shape = s_curve_shape(dv, acc[kk], jerk[kk])  # once, not per bisection step
+            vb2 = vb * vb
 
-            def place(p, lo=lo, dv=dv, a=a, vb=vb, span=span, kk=kk, rising=rising):
+            def place(p, lo=lo, dv=dv, a=a, vb2=vb2, span=span, shape=shape, rising=rising):
                 vt = lo + p * dv if rising else lo + (1.0 - p) * dv
-                _, big_g = s_curve(p, dv, acc[kk], jerk[kk])
-                x = (vt * vt - vb * vb) / (2 * a) + span * (big_g - 0.5 * p * p)
+                big_g = s_curve_big_g(p, shape)
+                x = (vt * vt - vb2) / (2 * a) + span * (big_g - 0.5 * p * p)
                 return x if rising else -x  # increasing in p either way
 
             a_p, b_p = np.zeros(sel.size), np.ones(sel.size)
@@ -327,7 +350,7 @@ class Profile:
                 below = place(mid) < goal
                 a_p = np.where(below, mid, a_p)
                 b_p = np.where(below, b_p, mid)
-            g_share, _ = s_curve(0.5 * (a_p + b_p), dv, acc[kk], jerk[kk])
+            g_share = s_curve_g(0.5 * (a_p + b_p), shape)
             v[sel] = lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
         return v
 
