@@ -612,3 +612,18 @@ def test_feed_moves_before_the_first_f_run_at_it_with_a_notice():
     fails(
         "G21\nG0 X0 Y0 Z5\nG1 Z-1 (F800 is a comment)\nM2\n", 3, "feed move without a feed rate F"
     )
+
+
+@pytest.mark.parametrize("prefix", ["", "#1 = 10\n"], ids=["vectorised", "full-interpreter"])
+def test_linuxcnc_g61_is_exact_path_and_g61_1_exact_stop(prefix):
+    """LinuxCNC's G61 is exact *path*: no blending, so a corner is a stop, but blocks that run
+    on tangent do not stop; G61.1 is exact stop. Measured in LinuxCNC 2.9's planner
+    (2026-11-26, ../shared/tools/linuxcnc, F3000): 50 mm/s kept through the joints of G1 X10,
+    X20, X30 under G61, 0 at the 90 deg corner after them and at every block end under G61.1.
+    ncperf reads G61 there as a continuous path of tolerance 0 (Fanuc's G61 stays exact stop:
+    test_path_modes_g61_g64_g9_and_m0)."""
+    tp = read(prefix + "G21 G61 G1 X10 F3000\nX20\nX30\nY10\nG61.1 X40\nX50\nG64 X60\n", "t.ngc")
+    exact = PathMode.EXACT_STOP
+    assert list(tp.path_mode) == [0, 0, 0, 0, exact, exact, 0]
+    assert list(tp.tolerance[:4]) == [0.0, 0.0, 0.0, 0.0]
+    assert np.isnan(tp.tolerance[4:]).all()

@@ -203,3 +203,18 @@ def test_s_curve_inside_a_jerk_limited_ramp(models):
     assert pr.speed_at(10 - 1e5 * 0.025**3 / 6) == pytest.approx(31.25, abs=1e-5)
     assert pr.speed_at(5.0) == pytest.approx(100.0)
     assert np.allclose(pr.speed_at(smp.s[1:-1]), smp.v[1:-1], atol=1e-4)
+
+
+def test_linuxcnc_g61_runs_through_tangent_joints(models):
+    """Three collinear 10 mm blocks at F3000 (50 mm/s), A 2500 mm/s^2, no jerk limit: under
+    LinuxCNC's G61 (exact path) one ramp up and one down, T = 30 / 50 + 50 / 2500 = 0.62 s;
+    under G61.1 (exact stop) three, T = 3 (10 / 50 + 50 / 2500) = 0.66 s."""
+    from adapters.gcode import read_gcode
+
+    for mode, want in (("G61", 0.62), ("G61.1", 0.66)):
+        text = f"G21 G90 G0 X0 Y0 Z0\n{mode} G1 X10 F3000\nX20\nX30\n".encode()
+        tp = read_gcode(text, "t.ngc")
+        ev = models.evaluate(tp, machine(jerk=(INF, INF, INF)))
+        pr = build_profile(ev)
+        feed = tp.is_feed
+        assert float(pr.time[feed].sum()) == pytest.approx(want, rel=1e-9), mode

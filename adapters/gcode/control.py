@@ -445,7 +445,7 @@ class Controller:
         p = fr.inverse(self.pos)
         pm = self.path_mode
         if pm is None:
-            pm = 610 if self._path_exact() else 640
+            pm = W.exact_stop_codes(self.dialect)[0] if self._path_exact() else 640
         return State(
             motion=-1 if self.motion is None else self.motion,
             plane=self.plane,
@@ -711,9 +711,12 @@ class Controller:
             if code in (610, 611, 640, 600) or 6410 <= code <= 6450:
                 self.path_mode = code
                 if d == "linuxcnc":
-                    # G64 P sets the path tolerance; G64 alone and G61 clear it
+                    # G64 P sets the path tolerance; G64 alone and G61.1 clear it; G61 is
+                    # exact path, a tolerance of 0 (W.EXACT_PATH)
                     p = words.get("P") if code == 640 else None
                     self.tolerance = p * self.scale if p is not None and p > 0 else math.nan
+                    if code == W.EXACT_PATH:
+                        self.tolerance = 0.0
                     if code == 640 and words.get("Q", 0.0) > 0:
                         self.notes.add(
                             "G64 Q: LinuxCNC may merge collinear G1 blocks within Q; ncperf "
@@ -1265,7 +1268,7 @@ class Controller:
             if dflt is None:
                 return False
             return dflt == "exact_stop"
-        return pm in W.EXACT_STOP_CODES
+        return pm in W.exact_stop_codes(self.dialect)
 
     def _first_feed(self, error: str) -> None:
         """A feed move before any F: hobby CAM writes its first plunge before the F that

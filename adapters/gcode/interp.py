@@ -432,7 +432,8 @@ class Interpreter:
             hit = fm == code
             if hit.any():
                 raise self.error(self.al[np.argmax(hit)], f"{name} is not supported")
-        default = 610 if self.default_path_mode == "exact_stop" else 640
+        stop = W.exact_stop_codes(self.dialect)[0]  # the machine's default exact stop
+        default = stop if self.default_path_mode == "exact_stop" else 640
         self.path_mode = fill(G.PATH_MODE, default if init is None else init.path_mode)
         if init is None and not (gg[G.PATH_MODE] >= 0).any():
             note = W.path_mode_note(self.dialect, self.default_path_mode)
@@ -696,6 +697,7 @@ class Interpreter:
         pm = self.g[W.Group.PATH_MODE]
         p = self.vals["P"]
         tol = np.where((pm == 640) & self.pres["P"] & (p > 0), p * self.scale, np.nan)
+        tol[pm == W.EXACT_PATH] = 0.0  # G61, exact path: no deviation at all
         return _ffill(tol, pm >= 0, initial)
 
     def _columns(self, mi: NDArray[np.int64]) -> dict:
@@ -755,7 +757,7 @@ class Interpreter:
         self._arcs(cols, mi)
 
         # Path mode: modal exact stop, G9 on the block, M0/M1 after the block.
-        exact_line = np.isin(self.path_mode, W.EXACT_STOP_CODES) | (
+        exact_line = np.isin(self.path_mode, W.exact_stop_codes(self.dialect)) | (
             self.g[W.Group.EXACT_STOP_BLOCK] >= 0
         )
         mode = np.where(exact_line[mi], PathMode.EXACT_STOP, PathMode.CONTINUOUS).astype(np.int8)

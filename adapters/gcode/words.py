@@ -191,6 +191,18 @@ TABLES = {"fanuc": FANUC, "siemens": SIEMENS, "linuxcnc": LINUXCNC}
 MOTION_RAPID, MOTION_LINE, MOTION_CW, MOTION_CCW, MOTION_NONE = 0, 10, 20, 30, 800
 PLANE_NORMAL = {170: (0.0, 0.0, 1.0), 180: (0.0, 1.0, 0.0), 190: (1.0, 0.0, 0.0)}
 EXACT_STOP_CODES = (610, 611, 600)
+#: LinuxCNC's G61 is *exact path*, not exact stop (its G61.1): no blending, so the machine
+#: stops at a corner, but it runs on through joints that are tangent -- measured in LinuxCNC
+#: 2.9's planner (full speed through collinear G1 joints under G61, 0 under G61.1). Read as a
+#: continuous path of tolerance 0: model 1 then stops at every corner and nowhere else.
+EXACT_PATH = 610
+
+
+def exact_stop_codes(dialect: str) -> tuple[int, ...]:
+    """The path-mode codes that stop at every block end in ``dialect``."""
+    return (611,) if dialect == "linuxcnc" else EXACT_STOP_CODES
+
+
 #: units code -> (geometry in inch, feed in inch/min). Siemens G70/G71 change the
 #: geometry only; feeds stay in the basic system (assumed metric), G700/G710 change both.
 UNITS = {
