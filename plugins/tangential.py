@@ -50,7 +50,10 @@ AXES = ("X", "Y", "Z")
 #: Corners computed together: the temporaries of :func:`corner_feed` stay a few MB however
 #: long the program (every corner is computed on its own row, so the pieces change nothing).
 CHUNK = 65_536
-LABELS = tuple(f"{q} {ax}" for q in ("feed", "acceleration", "jerk") for ax in AXES)
+#: A corner the program allows no deviation at (LinuxCNC G61, exact path: tolerance 0) is a
+#: stop whatever the axes could do; it is named for that, not for an axis.
+NO_BLEND = "exact path: no blending"
+LABELS = (*(f"{q} {ax}" for q in ("feed", "acceleration", "jerk") for ax in AXES), NO_BLEND)
 
 
 def inserted_radius(
@@ -159,6 +162,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     tit = np.where(np.isnan(tol), machine.path_tolerance, tol)
     radius = inserted_radius(beta, shorter, tit)
     feed, limit = corner_feed(tp.tangent_end[j], tp.tangent_start[j + 1], radius, machine)
+    limit = np.where(tit == 0.0, LABELS.index(NO_BLEND), limit)
     return [
         Indicator(
             name=NAME,

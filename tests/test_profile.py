@@ -218,3 +218,17 @@ def test_linuxcnc_g61_runs_through_tangent_joints(models):
         pr = build_profile(ev)
         feed = tp.is_feed
         assert float(pr.time[feed].sum()) == pytest.approx(want, rel=1e-9), mode
+
+
+def test_linuxcnc_g61_corner_is_a_stop_named_for_the_path_mode(models):
+    """Under LinuxCNC's G61 the 90 deg corner after X30 is a stop (no blending: tolerance 0)
+    and says why; the collinear joints before it report nothing."""
+    from adapters.gcode import read_gcode
+
+    tp = read_gcode(b"G21 G90 G0 X0 Y0 Z0\nG61 G1 X10 F3000\nX20\nX30\nY10\n", "t.ngc")
+    ev = models.evaluate(tp, machine())
+    corner = int(np.flatnonzero(tp.line == 5)[0]) - 1  # junction: end of the X30 move
+    k = np.flatnonzero(ev.junction == corner)
+    assert k.size == 1 and ev.junction_feed[k[0]] == 0.0
+    assert ev.labels[ev.junction_limit[k[0]]] == "exact path: no blending"
+    assert set(ev.junction[ev.junction_feed < 50.0].tolist()) == {corner}
