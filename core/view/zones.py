@@ -124,9 +124,9 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     # Zone of each move: zone m lies between break m-1 and break m (the breaks before it).
     zone_of: NDArray[np.int64] = np.cumsum(fast) - fast
     inner = ~fast
-    # float64 whatever the count: a bincount over no moves is int64, and np.add.at below
-    # would truncate every lone corner's fractions into it
-    # (inner moves are feed moves: Profile.lost_time of them, without its (n,) array)
+    # Inner moves are feed moves: their Profile.lost_time, without its (n,) array. The sums
+    # are float64 whatever the count: a bincount over no moves is int64, and np.add.at
+    # below would truncate every lone corner's fractions into it.
     ii = np.flatnonzero(inner)
     zi, len_i = zone_of[ii], tp.length[ii]
     with np.errstate(invalid="ignore"):
