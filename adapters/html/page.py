@@ -31,6 +31,7 @@ import base64
 import json
 import math
 import zlib
+from collections.abc import Callable, Iterator
 from dataclasses import dataclass, field
 from importlib import resources
 from typing import TYPE_CHECKING, Any
@@ -74,8 +75,25 @@ PER_MIN = 60.0
 U16 = 65535
 #: Bit of ``npts`` that says the move's own start point comes first.
 BREAK = 0x80
+#: Elements converted or compressed at a time: the float64 temporaries of a per-move array
+#: stay a few MB however long the path (1M moves: 325 MB over the analysis when whole).
+PIECE = 1 << 18
 
 _KIND_RAPID, _KIND_LINE, _KIND_ARC = 0, 1, 2
+
+
+def _pieces(n: int) -> Iterator[slice]:
+    for i in range(0, n, PIECE):
+        yield slice(i, min(i + PIECE, n))
+
+
+def _per_move(n: int, dtype: type, f: Callable[[slice], NDArray]) -> NDArray:
+    """``f`` over the moves piece by piece into one (n,) array of ``dtype``: f is elementwise,
+    so the values are those of f over all moves at once."""
+    out: NDArray = np.empty(n, dtype=dtype)
+    for s in _pieces(n):
+        out[s] = f(s)
+    return out
 
 
 def _read_asset(name: str) -> str:
@@ -111,19 +129,12 @@ class Blobs:
         a = np.ascontiguousarray(arr)
         if a.dtype.byteorder == ">":
             a = a.astype(a.dtype.newbyteorder("<"))
-        if delta:
-            if a.dtype != np.int32:
-                raise ValueError(f"delta coding needs int32, got {a.dtype}")
-            d = np.empty_like(a)
-            if a.shape[-1]:
-                d[..., 0] = a[..., 0]
-                d[..., 1:] = np.diff(a.astype(np.int64), axis=-1).astype(np.int32)
-            a = d
-        size = a.dtype.itemsize
-        raw = a.tobytes()
-        if size > 1:  # byte planes
-            raw = np.frombuffer(raw, dtype=np.uint8).reshape(-1, size).T.tobytes()
-        blob = zlib.compress(raw, 6)
+        if delta and a.dtype != np.int32:
+            raise ValueError(f"delta coding needs int32, got {a.dtype}")
+        # The planes (or the bytes) go to zlib piece by piece: one stream flushed once gives
+        # the bytes of zlib.compress over the whole, without the whole's copies.
+        z = zlib.compressobj(6)
+        blob = b"".join(z.compress(part) for part in _stored_pieces(a, delta)) + z.flush()
         self.raw_bytes += a.nbytes
         ident = f"b{len(self.items)}"
         self.items.append((ident, base64.b64encode(blob).decode("ascii")))
@@ -139,6 +150,32 @@ class Blobs:
             f'<script type="application/octet-stream" id="{i}">{b}</script>\n'
             for i, b in self.items
         )
+
+
+def _stored_pieces(a: NDArray, delta: bool) -> Iterator[memoryview]:
+    """The bytes :meth:`Blobs.add` compresses, in order, a piece at a time: each byte plane
+    over all elements (C order), of the values or, with ``delta``, of their differences along
+    the last axis (int32 subtraction wraps as the int64 difference cast back to int32 does)."""
+    if a.size == 0:
+        return
+    size = a.dtype.itemsize
+    rows = a.reshape(-1, a.shape[-1]) if delta else a.reshape(1, -1)
+    for plane in range(size):
+        for row in rows:
+            for s in _pieces(row.size):
+                v = row[s]
+                if delta:
+                    d = np.empty_like(v)
+                    if s.start:
+                        np.subtract(v, row[s.start - 1 : s.stop - 1], out=d)
+                    else:
+                        d[0] = v[0]
+                        np.subtract(v[1:], v[:-1], out=d[1:])
+                    v = d
+                plane_bytes = (
+                    v if size == 1 else np.ascontiguousarray(v.view(np.uint8)[plane::size])
+                )
+                yield plane_bytes.data
 
 
 def arc_counts(tp: ToolPath, arcs: NDArray[np.int64], extent: float) -> NDArray[np.int64]:
@@ -182,7 +219,8 @@ def geometry(tp: ToolPath, quantum: float, centre: NDArray[np.float64]) -> Geome
     """The polyline of ``tp``, arcs tessellated, with breaks where moves do not join (on the
     grid of ``quantum`` mm around ``centre``)."""
     n = tp.n
-    ext = float(np.ptp(np.concatenate([tp.start, tp.end]), axis=0).max()) if n else 0.0
+    lo, hi = _box(tp)
+    ext = float((hi - lo).max()) if n else 0.0
     arcs = np.flatnonzero(tp.is_arc)
     ok = (
         np.isfinite(tp.radius[arcs])
@@ -194,15 +232,23 @@ def geometry(tp: ToolPath, quantum: float, centre: NDArray[np.float64]) -> Geome
     counts = arc_counts(tp, arcs, ext)
     add = np.ones(n, dtype=np.int64)
     add[arcs] = counts
-    qs = np.rint((tp.start - centre) / quantum)
-    qe = np.rint((tp.end - centre) / quantum)
     brk = np.ones(n, dtype=bool)
     if n > 1:
-        brk[1:] = np.any(qs[1:] != qe[:-1], axis=1)
+        # Move k + 1 starts where move k ends unless their grid points differ.
+        brk[1:] = _per_move(
+            n - 1,
+            np.bool_,
+            lambda s: np.any(
+                np.rint((tp.start[s.start + 1 : s.stop + 1] - centre) / quantum)
+                != np.rint((tp.end[s] - centre) / quantum),
+                axis=1,
+            ),
+        )
     per = add + brk
     last = np.cumsum(per) - 1
     first = last - add
     pts = np.empty((int(per.sum()), 3))
+    del per
     pts[first] = tp.start  # where there is no break, the previous end lands here too
     pts[last] = tp.end
     if arcs.size:
@@ -221,9 +267,22 @@ def geometry(tp: ToolPath, quantum: float, centre: NDArray[np.float64]) -> Geome
         pts[np.repeat(first[arcs], m)[inner] + local[inner]] = samples[inner]
     # Where moves join, the shared point is the previous end (written last, below).
     joined = np.flatnonzero(~brk)
-    pts[first[joined]] = tp.end[joined - 1]
-    npts = (add | np.where(brk, BREAK, 0)).astype(np.uint8)
+    for s in _pieces(joined.size):
+        pts[first[joined[s]]] = tp.end[joined[s] - 1]
+    npts = add.astype(np.uint8)  # 1..ARC_MAX_SEGMENTS
+    npts[brk] |= BREAK
     return Geometry(pts, npts, first, last)
+
+
+def _box(tp: ToolPath) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """(3,) least and greatest coordinates of the moves' ends and starts (mm); zeros for no
+    moves."""
+    if tp.n == 0:
+        return np.zeros(3), np.zeros(3)
+    return (
+        np.minimum(tp.start.min(axis=0), tp.end.min(axis=0)),
+        np.maximum(tp.start.max(axis=0), tp.end.max(axis=0)),
+    )
 
 
 def _names(ev: Evaluation | None, ann: Annotations) -> list[str]:
@@ -236,10 +295,23 @@ def _names(ev: Evaluation | None, ann: Annotations) -> list[str]:
 
 
 def _name_index(ind: NDArray, lim: NDArray, nlab: int) -> NDArray[np.int16]:
-    ind = np.asarray(ind, dtype=np.int64)
-    lim = np.asarray(lim, dtype=np.int64)
-    ok = (ind >= 0) & (lim >= 0)
-    return np.where(ok, ind * max(nlab, 1) + lim, -1).astype(np.int16)
+    ind, lim = np.asarray(ind), np.asarray(lim)
+
+    def index(s: slice) -> NDArray[np.int16]:
+        i = ind[s].astype(np.int64)
+        b = lim[s].astype(np.int64)
+        return np.where((i >= 0) & (b >= 0), i * max(nlab, 1) + b, -1).astype(np.int16)
+
+    return _per_move(ind.shape[0], np.int16, index)
+
+
+def _feed_f32(is_feed: NDArray[np.bool_], feed: NDArray) -> NDArray[np.float32]:
+    """A feed per move (mm/s) in mm/min as float32, NaN for rapids."""
+    return _per_move(
+        is_feed.shape[0],
+        np.float32,
+        lambda s: np.where(is_feed[s], feed[s] * PER_MIN, np.nan).astype(np.float32),
+    )
 
 
 def _u16(x: NDArray, scale: float) -> NDArray[np.uint16]:
@@ -252,23 +324,70 @@ def _u8(x: NDArray) -> NDArray[np.uint8]:
     return np.rint(np.clip(v, 0.0, 1.0) * 255).astype(np.uint8)
 
 
+def _speed_arrays(
+    blobs: Blobs, tp: ToolPath, ann: Annotations, pr: Profile | None, spec: dict[str, Any]
+) -> None:
+    """The mean speed over F per move and its class (the "speed" colour mode)."""
+    n, is_feed = tp.n, tp.is_feed
+    share = ann.speed_share
+    if share is None and pr is not None:
+
+        def own_share(s: slice) -> NDArray:
+            with np.errstate(divide="ignore", invalid="ignore"):
+                return np.minimum(tp.length[s] / (pr.time[s] * tp.feed[s]), 1.0)
+
+        share = _per_move(n, np.float64, own_share)
+    if share is not None:
+        spec["share"] = blobs.add(
+            _per_move(n, np.uint16, lambda s: _u16(np.where(is_feed[s], share[s], np.nan), 1.0))
+        )
+    sclass = ann.speed_class
+    if sclass is None and share is not None:
+        sclass = _per_move(
+            n,
+            np.int8,
+            lambda s: np.where(
+                is_feed[s], reduction_class(1.0 - np.nan_to_num(share[s], nan=1.0)), -1
+            ).astype(np.int8),
+        )
+    if sclass is not None:
+        spec["sclass"] = blobs.add(np.asarray(sclass, dtype=np.int8))
+
+
 def _profile_arrays(blobs: Blobs, tp: ToolPath, pr: Profile, spec: dict[str, Any]) -> None:
     """Entry, peak and exit speeds and the ramps' ends, for the speed plot."""
-    v = np.stack([pr.v_entry, pr.v_peak, pr.v_exit])
-    finite = v[np.isfinite(v)]
-    vmax = float(finite.max()) if finite.size else 0.0
+    speeds = (pr.v_entry, pr.v_peak, pr.v_exit)
+    top = [
+        float(f.max())
+        for v in speeds
+        for s in _pieces(v.size)
+        if (f := v[s][np.isfinite(v[s])]).size
+    ]
+    vmax = max(top) if top else 0.0
     vmax = vmax if vmax > 0 else 1.0
-    _, _, d_up, d_dn, _ = pr.phases
-    length = tp.length
-    with np.errstate(divide="ignore", invalid="ignore"):
-        inv = np.where(length > 0, 1.0 / length, 0.0)
-    h0 = pr.hold_start * inv
-    up = (pr.hold_start + np.nan_to_num(d_up)) * inv
-    dn = 1.0 - (pr.hold_end + np.nan_to_num(d_dn)) * inv
-    h1 = 1.0 - pr.hold_end * inv
     spec["vmax"] = vmax * PER_MIN
-    spec["v"] = blobs.add(_u16(v, vmax))
-    spec["frac"] = blobs.add(np.stack([_u8(h0), _u8(up), _u8(np.maximum(dn, up)), _u8(h1)]))
+    n = tp.n
+    out16 = np.empty((3, n), dtype=np.uint16)
+    for row, v in zip(out16, speeds, strict=True):
+        for s in _pieces(n):
+            row[s] = _u16(v[s], vmax)
+    spec["v"] = blobs.add(out16)
+    del out16
+    # Piece by piece with Profile.phases_of (the arithmetic of Profile.phases, which would
+    # keep five (n,) arrays on the profile).
+    out8 = np.empty((4, n), dtype=np.uint8)
+    for s in _pieces(n):
+        _, _, d_up, d_dn, _ = pr.phases_of(s)
+        length = tp.length[s]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            inv = np.where(length > 0, 1.0 / length, 0.0)
+        up = (pr.hold_start[s] + np.nan_to_num(d_up)) * inv
+        dn = 1.0 - (pr.hold_end[s] + np.nan_to_num(d_dn)) * inv
+        out8[0, s] = _u8(pr.hold_start[s] * inv)
+        out8[1, s] = _u8(up)
+        out8[2, s] = _u8(np.maximum(dn, up))
+        out8[3, s] = _u8(1.0 - pr.hold_end[s] * inv)
+    spec["frac"] = blobs.add(out8)
 
 
 def _text(program: str | None) -> tuple[str | None, str]:
@@ -283,9 +402,11 @@ def _text(program: str | None) -> tuple[str | None, str]:
     if len(data) > TEXT_LIMIT:
         return None, f"program text not embedded (over {TEXT_LIMIT // 2**20} MB)"
     text = data.decode("utf-8", errors="surrogateescape")
+    del data  # a long program is held once or twice at a time, not four times
+    text = text.replace("\r\n", "\n")
     # Every control, bidi control and undecodable byte as a visible escape (as the terminal
     # and the SVG show them); newlines kept: the page splits the text into lines.
-    return printable(text.replace("\r\n", "\n"), lines=True), ""
+    return printable(text, lines=True), ""
 
 
 def panel_data(
@@ -332,8 +453,7 @@ def panel_data(
         raise ValueError(
             f"{tp.source}:{tp.line[i]}: move {i} has a non-finite end point; it cannot be drawn"
         )
-    pts_all = np.concatenate([tp.start, tp.end]) if n else np.zeros((1, 3))
-    lo, hi = pts_all.min(axis=0), pts_all.max(axis=0)
+    lo, hi = _box(tp)
     if centre is None:
         centre = 0.5 * (lo + hi)
     reach = float(np.max(np.abs(np.concatenate([lo - centre, hi - centre])))) if n else 0.0
@@ -342,18 +462,17 @@ def panel_data(
     # Arc samples bulge beyond the end points: the box is the drawn points'.
     if geo.points.size:
         lo, hi = geo.points.min(axis=0), geo.points.max(axis=0)
-    q = np.rint((geo.points - centre) / quantum).astype(np.int32)
+    # Stored axis by axis (3, p); the float points go once on the grid.
+    q = np.empty((3, geo.points.shape[0]), dtype=np.int32)
+    for s in _pieces(geo.points.shape[0]):
+        q[:, s] = np.rint((geo.points[s] - centre) / quantum).astype(np.int32).T
+    npts = geo.npts
+    del geo
 
     ev, pr = evaluation, profile
     names = _names(ev, ann)
     nlab = len(ev.labels) if ev is not None else len(ann.labels)
-
-    kind = np.where(tp.is_arc, _KIND_ARC, np.where(tp.is_feed, _KIND_LINE, _KIND_RAPID))
-    feed = np.where(tp.is_feed, tp.feed * PER_MIN, np.nan).astype(np.float32)
-    share = ann.speed_share
-    if share is None and pr is not None:
-        with np.errstate(divide="ignore", invalid="ignore"):
-            share = np.minimum(tp.length / (pr.time * tp.feed), 1.0)
+    is_feed = tp.is_feed
     spec: dict[str, Any] = {
         "label": label,
         "source": tp.source,
@@ -363,34 +482,34 @@ def panel_data(
         "lo": (lo - centre).tolist(),
         "hi": (hi - centre).tolist(),
         "names": names,
-        "npts": blobs.add(geo.npts),
-        "pts": blobs.add(np.ascontiguousarray(q.T), delta=True),
-        "kind": blobs.add(kind.astype(np.int8)),
-        "line": blobs.add(tp.line.astype(np.int32), delta=True),
-        "feed": blobs.add(feed),
-        "length": blobs.add(tp.length.astype(np.float32)),
-        "mclass": blobs.add(np.asarray(ann.move_class, dtype=np.int8)),
-        "lclass": blobs.add(np.asarray(ann.length_class, dtype=np.int8)),
+        "npts": blobs.add(npts),
+        "pts": blobs.add(q, delta=True),
     }
-    if share is not None:
-        spec["share"] = blobs.add(_u16(np.where(tp.is_feed, share, np.nan), 1.0))
-    sclass = ann.speed_class
-    if sclass is None and share is not None:
-        sclass = np.where(
-            tp.is_feed, reduction_class(1.0 - np.nan_to_num(share, nan=1.0)), -1
-        ).astype(np.int8)
-    if sclass is not None:
-        spec["sclass"] = blobs.add(np.asarray(sclass, dtype=np.int8))
+    del npts, q
+    kind = np.full(n, _KIND_RAPID, dtype=np.int8)
+    kind[is_feed] = _KIND_LINE
+    kind[tp.is_arc] = _KIND_ARC
+    spec["kind"] = blobs.add(kind)
+    del kind
+    spec["line"] = blobs.add(tp.line.astype(np.int32), delta=True)
+    spec["feed"] = blobs.add(_feed_f32(is_feed, tp.feed))
+    spec["length"] = blobs.add(tp.length.astype(np.float32))
+    spec["mclass"] = blobs.add(np.asarray(ann.move_class, dtype=np.int8))
+    spec["lclass"] = blobs.add(np.asarray(ann.length_class, dtype=np.int8))
+    _speed_arrays(blobs, tp, ann, pr, spec)
     if ev is not None:
         spec["elim"] = blobs.add(_name_index(ev.element_indicator, ev.element_limit, nlab))
-        efeed = np.where(tp.is_feed, ev.element_feed * PER_MIN, np.nan)
-        spec["efeed"] = blobs.add(efeed.astype(np.float32))
+        spec["efeed"] = blobs.add(_feed_f32(is_feed, ev.element_feed))
     j = np.asarray(ann.junction, dtype=np.int64)
     if j.size:
         spec["junction"] = blobs.add(j.astype(np.int32), delta=True)
         spec["jclass"] = blobs.add(np.asarray(ann.junction_class, dtype=np.int8))
-        spec["jfeed"] = blobs.add((np.asarray(ann.junction_feed) * PER_MIN).astype(np.float32))
+        jfeed = np.asarray(ann.junction_feed)
+        spec["jfeed"] = blobs.add(
+            _per_move(j.size, np.float32, lambda s: (jfeed[s] * PER_MIN).astype(np.float32))
+        )
         spec["jname"] = blobs.add(_name_index(ann.junction_cause, ann.junction_limit, nlab))
+    del j
     if pr is not None:
         _profile_arrays(blobs, tp, pr, spec)
     if tp.origin is not None:
@@ -400,7 +519,9 @@ def panel_data(
     text, note = _text(program)
     if text is not None:
         raw = text.encode("utf-8")
+        del text
         spec["text"] = blobs.add(np.frombuffer(raw, dtype=np.uint8))
+        del raw
     spec["text_note"] = note
     spec["zones"] = [
         {
@@ -563,9 +684,11 @@ def build(tp: ToolPath, ann: Annotations, target: Any, view: str) -> bytes:
         kind = "compare" if len(resolved) > 1 else "analyze"
         centre = None
         if len(resolved) > 1:
-            pts = np.concatenate([np.concatenate([r[1].start, r[1].end]) for r in resolved])
-            if pts.size:
-                centre = 0.5 * (pts.min(axis=0) + pts.max(axis=0))
+            boxes = [_box(r[1]) for r in resolved if r[1].n]
+            if boxes:
+                lo = np.min([b[0] for b in boxes], axis=0)
+                hi = np.max([b[1] for b in boxes], axis=0)
+                centre = 0.5 * (lo + hi)
         for label, rtp, rann, ev, pr, program in resolved:
             panels.append(
                 panel_data(
