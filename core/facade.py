@@ -194,12 +194,14 @@ class Ncperf:
         cases: Sequence[tuple[ToolPath, Sequence[Alignment], Sequence[str]]],
         base: Setup,
         effects: Mapping[str, Effect],
+        objective: str = "auto",
     ) -> Calibration:
         """The machine of ``base`` calibrated on programs and their aligned traces, with
-        these (controller) effects (see :mod:`core.diagnosis.calibrate`)."""
+        these (controller) effects, on the ``objective`` "auto", "feed" or "block-time"
+        (see :mod:`core.diagnosis.calibrate`)."""
         from core.diagnosis.calibrate import calibrate  # only calibration pays for it
 
-        return calibrate(self.indicators, cases, base, effects)
+        return calibrate(self.indicators, cases, base, effects, objective)
 
     # command line
     def add_commands(self, subparsers: argparse._SubParsersAction) -> None:

@@ -4,9 +4,10 @@ terminal report.
 The machine file is the start machine's own file with the calibrated values put in: axis
 limits scaled (``axis_dynamics``), the block time, path tolerance, path mode and path speed
 limit set in ``[controller]``, the planner's acceleration shares as ``[effects.NAME]``
-tables, and the noise floor as ``[diagnosis] noise_floor``; every calibrated value carries
-a comment with its fitted range and the folds' values. Units as the file speaks them
-(m/min, m/s^2, m/s^3, s, mm; the noise floor in mm/min).
+tables, and the noise floor as ``[diagnosis] noise_floor`` (calibrated on the feed gap
+only); every calibrated value carries a comment with its fitted range and the folds'
+values. Units as the file speaks them (m/min, m/s^2, m/s^3, s, mm; the noise floor in
+mm/min).
 """
 
 from __future__ import annotations
@@ -150,10 +151,13 @@ def machine_toml(
             data.setdefault("effects", {})[c.name] = values
             for pname in values:
                 comments[(("effects", c.name), pname)] = "calibrated: " + _rng(c, pname)
-    data["diagnosis"] = {"noise_floor": round(cal.noise_floor, 3)}
-    comments[(("diagnosis",), "noise_floor")] = (
-        "mm/min: the held-out gap this file leaves (ncperf diagnose's floor)"
-    )
+    if cal.objective.name == "feed":
+        data["diagnosis"] = {"noise_floor": round(cal.noise_floor, 3)}
+        comments[(("diagnosis",), "noise_floor")] = (
+            "mm/min: the held-out gap this file leaves (ncperf diagnose's floor)"
+        )
+    # Calibrated on block times, the file's noise floor (a feed gap) is not measured: the
+    # start file's, if any, stays; the block-time figure is in the header.
     out = [f"# {line}".rstrip() for line in header.splitlines()]
     out.append("")
     _emit(data, (), comments, out)
@@ -163,11 +167,13 @@ def machine_toml(
 def report(cal: Calibration, *, start: str, out: str, labels: list[str]) -> str:
     """The terminal report."""
     lines = [f"ncperf calibrate: {len(labels)} trace(s) on {start}"]
+    obj = cal.objective
+    lines.append(f"  objective        {obj.name}: {obj.what} ({cal.objective_reason})")
     lines.append(f"  held-out data    {cal.held_out}")
     for k, (b, a) in enumerate(zip(cal.gap_before, cal.gap_after, strict=True)):
         share = (b - a) / b if b > 0 else 0.0
         lines.append(
-            f"  fold {'AB'[k]}           held-out gap {b:.1f} -> {a:.1f} mm/min RMS "
+            f"  fold {'AB'[k]}           held-out gap {b:.1f} -> {a:.1f} {obj.unit} RMS "
             f"({share:.0%} removed)"
         )
     if not cal.effects:
@@ -177,8 +183,11 @@ def report(cal: Calibration, *, start: str, out: str, labels: list[str]) -> str:
         doc = " (documented value)" if c.documented else ""
         lines.append(
             f"  calibrated       {c.name:28s} {params}{doc}  "
-            f"(fold A: {c.gap_before:.1f} -> {c.gap_after:.1f} mm/min)"
+            f"(fold A: {c.gap_before:.1f} -> {c.gap_after:.1f} {obj.unit})"
         )
-    lines.append(f"  noise floor      {cal.noise_floor:.1f} mm/min")
+    floor = f"  noise floor      {cal.noise_floor:.1f} {obj.unit}"
+    if obj.name != "feed":
+        floor += " (a block-time error: not written as the file's feed-gap floor)"
+    lines.append(floor)
     lines.append(f"  machine file     {out}")
     return "\n".join(lines)

@@ -162,6 +162,14 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         metavar="A,B,...",
         help="only these controller effects (default: every one ncperf calibrates)",
     )
+    cal.add_argument(
+        "--objective",
+        choices=("auto", "feed", "block-time"),
+        default="auto",
+        help="what the fit minimises: the feed gap along the path, or the time between "
+        "observed program-line changes over feed blocks (default auto: block time when every "
+        "trace carries program lines and samples coarser than 50 ms, as MTConnect does)",
+    )
     _trace_options(cal, "the traces'")
 
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
@@ -532,7 +540,7 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
             all_labels += labels
         base = setup_for(machine, effects, ramps=True)
         progress(f"calibrating {len(names)} effect(s) on {len(all_labels)} trace(s)")
-        cal = nc.calibrate(cases, base, {k: effects[k] for k in names})
+        cal = nc.calibrate(cases, base, {k: effects[k] for k in names}, args.objective)
     header = "\n".join(
         [
             f"Made by ncperf calibrate ({__version__}) on {datetime.date.today()} from",
@@ -540,9 +548,10 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
             f"{len(groups)} program(s):",
             *(f"  {Path(g[0]).name}: {', '.join(Path(t).name for t in g[1:])}" for g in groups),
             f"Held out: {cal.held_out}.",
-            "Held-out gap (RMS over time, measured - predicted feed), start -> calibrated: "
+            f"Objective: {cal.objective.name} ({cal.objective_reason}).",
+            f"Held-out gap ({cal.objective.what}), start -> calibrated: "
             + "; ".join(
-                f"fold {'AB'[k]} {b:.1f} -> {a:.1f} mm/min"
+                f"fold {'AB'[k]} {b:.1f} -> {a:.1f} {cal.objective.unit}"
                 for k, (b, a) in enumerate(zip(cal.gap_before, cal.gap_after, strict=True))
             ),
             f"Effects tried: {', '.join(cal.tried)}.",

@@ -19,6 +19,16 @@ fitted on several programs or runs and checked on others.
    documented value inside that range is written instead (the comment says so).
 5. The noise floor is the held-out gap the calibrated machine leaves, fold by fold (each
    with its own fit): what a diagnosis with this machine must beat to name an effect.
+
+What "gap" means is the objective's (:mod:`core.diagnosis.objective`): the feed gap (RMS over
+time of measured - predicted feed, mm/min) for traces that sample the motion finely, or,
+for recordings that sample it coarsely (MTConnect, every 0.1-0.2 s) and carry program
+lines, the block-time error (RMS over windows of feed blocks of measured - predicted time
+between observed line changes, ms; :mod:`core.diagnosis.blocktime`). ``objective="auto"``
+chooses the block-time one when every trace carries lines and samples coarser than
+COARSE_SAMPLING (:func:`choose_objective`); the floor of the test is then
+BLOCK_FLOOR_SHARE of the measured intervals, and the noise floor (in ms) is reported but is
+not the diagnosis's (which is a feed gap).
 """
 
 from __future__ import annotations
@@ -27,13 +37,18 @@ import dataclasses
 import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
+from core.diagnosis import blocktime
 from core.diagnosis.align import Alignment
+from core.diagnosis.blocktime import BlockData, block_data, has_lines, is_coarse, sample_period
 from core.diagnosis.diagnose import add_effects, noise_floor
 from core.diagnosis.fit import fit, predict_all
-from core.diagnosis.resample import Data, gap, pieces, resample, split
+from core.diagnosis.objective import BLOCK_TIME, FEED, OBJECTIVES, Objective
+from core.diagnosis.resample import Data, pieces, resample, split
+from core.diagnosis.rules import COARSE_SAMPLING
 from core.engine.effects import Effect, Setup
 from core.engine.indicators import IndicatorSource
 from core.engine.predict import Prediction
@@ -81,7 +96,7 @@ class Calibrated:
     documented : {name: str}
         Where a written value is documented (parameters that took the documented value).
     gap_before, gap_after : float
-        Held-out gap of fold A (mm/min) before and after this effect joined.
+        Held-out gap of fold A (the objective's unit) before and after this effect joined.
     """
 
     name: str
@@ -106,12 +121,18 @@ class Calibration:
     held_out : str
         How the folds were made.
     gap_before, gap_after : tuple of float
-        Held-out gap (mm/min) of each fold, with the start machine and calibrated (each
-        fold with its own fit).
+        Held-out gap of each fold (the objective's unit), with the start machine and
+        calibrated (each fold with its own fit).
     noise_floor : float
-        mm/min: the RMS of ``gap_after`` over the folds.
+        The RMS of ``gap_after`` over the folds (the objective's unit).
     tried : tuple of str
         The effects tried.
+    objective : Objective
+        What the gaps are (:data:`core.diagnosis.objective.FEED` or ``BLOCK_TIME``).
+    objective_reason : str
+        Why that one, in one phrase.
+    compared : int
+        Samples the gaps are over: grid points (feed) or intervals (block time).
     """
 
     effects: tuple[Calibrated, ...]
@@ -121,15 +142,27 @@ class Calibration:
     gap_after: tuple[float, ...]
     noise_floor: float
     tried: tuple[str, ...]
+    objective: Objective = FEED
+    objective_reason: str = ""
+    compared: int = 0
 
 
-def folds(data: Sequence[Data]) -> tuple[list[Data], list[Data], str]:
-    """Two folds (calibration / held-out masks swapped between them); see the module
-    docstring."""
+def _size(d: Data | BlockData) -> int:
+    return int(d.first.size if isinstance(d, BlockData) else d.s.size)
+
+
+def folds(data: Sequence[Any]) -> tuple[list[Any], list[Any], str]:
+    """Two folds (calibration / held-out masks swapped between them) of resampled feeds
+    (:class:`Data`) or block intervals (:class:`BlockData`); see the module docstring."""
     programs = sorted({d.case for d in data})
+    block = bool(data) and isinstance(data[0], BlockData)
     if len(programs) >= 2:
         a = [
-            dataclasses.replace(d, calibration=np.full(d.s.size, d.case % 2 == 0), chunk=pieces(d))
+            dataclasses.replace(
+                d,
+                calibration=np.full(_size(d), d.case % 2 == 0),
+                chunk=d.chunk if block else pieces(d),
+            )
             for d in data
         ]
         how = (
@@ -137,10 +170,41 @@ def folds(data: Sequence[Data]) -> tuple[list[Data], list[Data], str]:
             "measured, then the other way round"
         )
     else:
-        a, how = split(data)
+        a, how = blocktime.split(data) if block else split(data)
         how += ", then the other way round"
     b = [dataclasses.replace(d, calibration=~d.calibration) for d in a]
     return a, b, how
+
+
+def choose_objective(name: str, alignments: Sequence[Alignment]) -> tuple[Objective, str]:
+    """The objective to calibrate on and why: ``name`` "feed" or "block-time" as asked, or
+    "auto": block time when every trace carries program lines and samples coarser than
+    COARSE_SAMPLING, else the feed gap."""
+    if name not in ("auto", *OBJECTIVES):
+        raise UsageError(f"unknown objective '{name}' (auto, {', '.join(OBJECTIVES)})")
+    periods = [sample_period(al) for al in alignments]
+    fine = [p for p in periods if p <= COARSE_SAMPLING]
+    period = f"{(max(fine) if fine else min(periods, default=0.0)) * 1000:.0f} ms"
+    if name == "block-time":
+        if not all(has_lines(al) for al in alignments):
+            raise UsageError(
+                "the block-time objective needs traces with program lines (a line column, "
+                "MTConnect Block_Number)"
+            )
+        return BLOCK_TIME, "asked for"
+    if name == "feed":
+        return FEED, "asked for"
+    if is_coarse(alignments):
+        return BLOCK_TIME, (
+            f"chosen: the traces carry program lines and sample every {period} or more "
+            f"(median), coarser than {COARSE_SAMPLING * 1000:g} ms"
+        )
+    if not all(has_lines(al) for al in alignments):
+        return FEED, "chosen: not every trace carries program lines"
+    return FEED, (
+        f"chosen: the traces sample every {period} or finer (median), "
+        f"not coarser than {COARSE_SAMPLING * 1000:g} ms"
+    )
 
 
 def _refit(
@@ -150,14 +214,15 @@ def _refit(
     preds: list[Prediction],
     effects: Mapping[str, Effect],
     names: Sequence[str],
-    data: Sequence[Data],
+    data: Sequence[Any],
+    objective: Objective = FEED,
 ) -> tuple[list[dict[str, float]], list[Prediction]]:
     """The named effects fitted in order on one fold on top of ``base`` (whose predictions
     are ``preds``); the params and the last predictions."""
     current = base
     out = []
     for name in names:
-        params, preds = fit(indicators_of, tps, current, effects[name], data)
+        params, preds = fit(indicators_of, tps, current, effects[name], data, objective)
         out.append(params)
         current = effects[name].apply(current, params)
     return out, preds
@@ -180,30 +245,54 @@ def calibrate(
     cases: Sequence[tuple[ToolPath, Sequence[Alignment], Sequence[str]]],
     base: Setup,
     effects: Mapping[str, Effect],
+    objective: str = "auto",
 ) -> Calibration:
     """Calibrate the machine of ``base`` on the programs and their aligned traces (see the
-    module docstring); ``effects``: those that may be calibrated."""
+    module docstring); ``effects``: those that may be calibrated; ``objective``: "auto",
+    "feed" or "block-time" (:func:`choose_objective`)."""
     tps = [tp for tp, _, _ in cases]
-    data = [
-        resample(tp, al, lab, case=k)
-        for k, (tp, als, labs) in enumerate(cases)
-        for al, lab in zip(als, labs, strict=True)
-    ]
-    if not data or all(d.s.size == 0 for d in data):
-        raise UsageError("no measured feed moves to calibrate on")
+    obj, reason = choose_objective(objective, [al for _, als, _ in cases for al in als])
+    data: list[Any]
+    if obj is BLOCK_TIME:
+        data = [
+            block_data(tp, al, lab, case=k)
+            for k, (tp, als, labs) in enumerate(cases)
+            for al, lab in zip(als, labs, strict=True)
+        ]
+        if not data or all(d.first.size == 0 for d in data):
+            raise UsageError(
+                "no feed-block intervals between observed program-line changes to calibrate on"
+            )
+    else:
+        data = [
+            resample(tp, al, lab, case=k)
+            for k, (tp, als, labs) in enumerate(cases)
+            for al, lab in zip(als, labs, strict=True)
+        ]
+        if not data or all(d.s.size == 0 for d in data):
+            raise UsageError("no measured feed moves to calibrate on")
     fold_a, fold_b, how = folds(data)
-    floor, _ = noise_floor(base, fold_a)
+    floor = blocktime.floor(fold_a) if obj is BLOCK_TIME else noise_floor(base, fold_a)[0]
     before = predict_all(indicators_of, tps, base)
     chosen, _, preds_a = add_effects(
-        indicators_of, tps, base, before, effects, fold_a, floor, share=CAL_ADD_SHARE, most=CAL_MAX
+        indicators_of,
+        tps,
+        base,
+        before,
+        effects,
+        fold_a,
+        floor,
+        share=CAL_ADD_SHARE,
+        most=CAL_MAX,
+        objective=obj,
     )
     names = [c[0] for c in chosen]
-    params_b, preds_b = _refit(indicators_of, tps, base, before, effects, names, fold_b)
-    gaps_before = (gap(before, fold_a, "held_out"), gap(before, fold_b, "held_out"))
-    gaps_after = (gap(preds_a, fold_a, "held_out"), gap(preds_b, fold_b, "held_out"))
+    params_b, preds_b = _refit(indicators_of, tps, base, before, effects, names, fold_b, obj)
+    gaps_before = (obj.gap(before, fold_a, "held_out"), obj.gap(before, fold_b, "held_out"))
+    gaps_after = (obj.gap(preds_a, fold_a, "held_out"), obj.gap(preds_b, fold_b, "held_out"))
 
     # The written values, their ranges, documented values inside them.
-    everything = [dataclasses.replace(d, calibration=np.ones(d.s.size, dtype=bool)) for d in data]
+    everything = [dataclasses.replace(d, calibration=np.ones(_size(d), dtype=bool)) for d in data]
     final = base
     out = []
     for k, (name, params_a, g0, g1) in enumerate(chosen):
@@ -212,7 +301,7 @@ def calibrate(
         ranges: dict[str, tuple[float, float]] = {}
         documented: dict[str, str] = {}
         if eff.params:
-            ranges = _ranges(indicators_of, tps, final, eff, values, everything, floor)
+            ranges = _ranges(indicators_of, tps, final, eff, values, everything, floor, obj)
             for p in eff.params:
                 lo = min(ranges[p.name][0], params_a[p.name], params_b[k][p.name])
                 hi = max(ranges[p.name][1], params_a[p.name], params_b[k][p.name])
@@ -243,6 +332,9 @@ def calibrate(
         gap_after=gaps_after,
         noise_floor=floor_value,
         tried=tuple(effects),
+        objective=obj,
+        objective_reason=reason,
+        compared=sum(_size(d) for d in data),
     )
 
 
@@ -252,8 +344,9 @@ def _ranges(
     base: Setup,
     eff: Effect,
     values: Mapping[str, float],
-    data: Sequence[Data],
+    data: Sequence[Any],
     floor: float,
+    objective: Objective = FEED,
 ) -> dict[str, tuple[float, float]]:
     """Per parameter (the others at ``values``): the values around the written one whose
     gap on all the data is within RANGE_SHARE of its gap, or within the noise floor of it
@@ -265,7 +358,7 @@ def _ranges(
 
         def gap_at(x: float, name: str = p.name) -> float:
             preds = predict_all(indicators_of, tps, eff.apply(base, dict(values) | {name: x}))
-            return gap(preds, data, "calibration")
+            return objective.gap(preds, data, "calibration")
 
         g0 = gap_at(v0)
         limit = g0 + max(RANGE_SHARE * g0, floor) + TOL.float_slack

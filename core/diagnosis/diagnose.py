@@ -32,6 +32,7 @@ import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
@@ -39,6 +40,7 @@ from numpy.typing import NDArray
 from core.diagnosis.align import Alignment
 from core.diagnosis.fit import fit, predict_all
 from core.diagnosis.gaps import GapZone, gap_zones
+from core.diagnosis.objective import FEED, Objective
 from core.diagnosis.resample import (
     Data,
     feed_level,
@@ -298,21 +300,23 @@ def add_effects(
     current: Setup,
     preds: list[Prediction],
     effects: Mapping[str, Effect],
-    data: Sequence[Data],
+    data: Sequence[Any],
     floor: float,
     *,
     share: float,
     most: int,
     stop: float = 0.0,
     progress: Callable[[str], None] | None = None,
+    objective: Objective = FEED,
 ) -> tuple[list[tuple[str, dict[str, float], float, float]], Setup, list[Prediction]]:
     """Forward selection on top of ``current`` (whose predictions are ``preds``): every
     effect not yet added is fitted on the calibration data, and the one leaving the least
     held-out gap is added while it :func:`clears` the test (``share`` of what is left), at
     most ``most`` of them and while the gap is at least ``stop`` (mm/min). Returns (effect,
-    params, gap before, gap after) in the order added, the setup and its predictions."""
-    g_now = gap(preds, data, "held_out")
-    sq_now = held_out_chunks(preds, data)[0]
+    params, gap before, gap after) in the order added, the setup and its predictions. The
+    gaps are ``objective``'s (the feed gap, mm/min, unless told)."""
+    g_now = objective.gap(preds, data, "held_out")
+    sq_now = objective.chunks(preds, data)[0]
     added: list[tuple[str, dict[str, float], float, float]] = []
     while len(added) < most and g_now >= stop:
         trials = []
@@ -321,12 +325,12 @@ def add_effects(
                 continue
             if progress is not None:
                 progress(f"combining effects: fitting {name} on top of the chosen ones")
-            params, p = fit(indicators_of, tps, current, eff, data)
-            trials.append((gap(p, data, "held_out"), name, params, p))
+            params, p = fit(indicators_of, tps, current, eff, data, objective)
+            trials.append((objective.gap(p, data, "held_out"), name, params, p))
         if not trials:
             break
         g_new, name, params, p = min(trials, key=lambda x: x[0])
-        sq_new = held_out_chunks(p, data)[0]
+        sq_new = objective.chunks(p, data)[0]
         if not clears(g_now, g_new, sign_flip_p(sq_now, sq_new), floor, share):
             break
         added.append((name, params, g_now, g_new))

@@ -1,19 +1,20 @@
 """Fitting an effect's parameters to the calibration data: a grid, then a local refinement.
 
 An effect (:mod:`core.engine.effects`) is applied on top of a base setup; its parameters are
-those that minimise the RMS gap over time on the calibration data
-(:func:`core.diagnosis.resample.gap`).
+those that minimise the gap on the calibration data: the RMS gap over time of the feed
+(:func:`core.diagnosis.resample.gap`), or another :class:`core.diagnosis.objective.Objective`.
 """
 
 from __future__ import annotations
 
 import math
 from collections.abc import Callable, Sequence
+from typing import Any
 
 import numpy as np
 from numpy.typing import NDArray
 
-from core.diagnosis.resample import Data, gap
+from core.diagnosis.objective import FEED, Objective
 from core.diagnosis.rules import GRID_1D, GRID_2D, GRID_ND, REFINE
 from core.engine.effects import Effect, Param, Setup
 from core.engine.indicators import IndicatorSource
@@ -44,9 +45,12 @@ def fit(
     tps: Sequence[ToolPath],
     base: Setup,
     eff: Effect,
-    data: Sequence[Data],
+    data: Sequence[Any],
+    objective: Objective = FEED,
 ) -> tuple[dict[str, float], list[Prediction]]:
-    """Parameters of ``eff`` (on top of ``base``) minimising the calibration gap."""
+    """Parameters of ``eff`` (on top of ``base``) minimising the calibration gap of
+    ``objective`` (``data``: what it measures, :class:`core.diagnosis.resample.Data` for the
+    feed gap)."""
     m = base.machine
     defaults = eff.start(m)
     cache: dict[tuple, tuple[float, list[Prediction]]] = {}
@@ -55,7 +59,7 @@ def fit(
         key = tuple(round(values[p.name], 12) for p in eff.params)
         if key not in cache:
             preds = predict_all(indicators_of, tps, eff.apply(base, values))
-            cache[key] = (gap(preds, data, "calibration"), preds)
+            cache[key] = (objective.gap(preds, data, "calibration"), preds)
         return cache[key][0]
 
     if not eff.params:

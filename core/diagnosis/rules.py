@@ -84,6 +84,22 @@ MAX_CHOSEN = 4
 #: the same data always gets the same answer.
 SIGN_FLIPS = 20_000
 
+# ---------------------------------------------------------------- calibrating on block times
+#: ``ncperf calibrate --objective auto`` fits the time between observed line changes
+#: (:mod:`core.diagnosis.blocktime`) instead of the feed gap when every trace carries program
+#: lines and samples coarser than this (s, median period): the feed gap needs several samples
+#: per acceleration ramp (tens of ms at a few m/s^2 and tens of m/s^3); the LinuxCNC traces
+#: sample every 1 ms, MTConnect recordings every 0.1-0.2 s.
+COARSE_SAMPLING = 0.05
+#: Consecutive intervals between observed line changes are compared summed over windows of
+#: this many sampling periods (:mod:`core.diagnosis.blocktime`): the delays of the changes
+#: inside a window cancel, and its two ends weigh a fifth or less of it.
+WINDOW_PERIODS = 5.0
+#: The block-time objective's floor: an effect must lower the RMS block-time error by at
+#: least this share of the RMS measured window -- as MIN_FEED_SHARE of F for the feed gap,
+#: a difference within what any model of a controller can promise.
+BLOCK_FLOOR_SHARE = 0.004
+
 # ---------------------------------------------------------------- fitting
 #: A fitted parameter within this share of its range from a bound (in log space for log
 #: parameters) sits at the bound: the fit wanted to go further than the effect allows, so
