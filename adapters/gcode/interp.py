@@ -32,6 +32,8 @@ from core.model.toolpath import (
 )
 
 INCH = 25.4
+#: Arcs whose sweep is computed together (bounded (m, 3) temporaries on arc-heavy programs).
+ARC_PIECE = 131_072
 AXIS_LETTERS = "XYZ"
 CENTRE_LETTERS = "IJK"
 ALLOWED = set("GMXYZIJKRFPQNSTHDO")
@@ -826,9 +828,13 @@ class Interpreter:
                 al[k], f"{word} word is not in the arc's plane (G{int(plane[k]) // 10})"
             )
         off_in = off - off_n[:, None] * normal
-        absolute = self.arc_distance[lines] == 901
-        start_n = g.dot(s, normal)[:, None] * normal
-        centre = np.where(absolute[:, None], off_in + start_n, s + off_in)
+        del off, off_n  # (a million arcs: each (m, 3) array is 24 MB)
+        absolute = np.flatnonzero(self.arc_distance[lines] == 901)
+        centre = s + off_in  # incremental centres (G91.1, the default) ...
+        if absolute.size:  # ... and absolute ones (G90.1): the offset in the start's plane
+            sa, na = s[absolute], normal[absolute]
+            centre[absolute] = off_in[absolute] + g.dot(sa, na)[:, None] * na
+        del off_in
 
         r_idx = np.flatnonzero(has_r)
         if r_idx.size:
@@ -854,6 +860,7 @@ class Interpreter:
                 f"arc end point is {mismatch[k]:.4f} mm off the circle "
                 f"(radius {r0[k]:.4f} mm from the start)",
             )
+        del r0, r1, mismatch
         turns = np.zeros(arc_l.size)
         if self.dialect == "linuxcnc":
             pt = p["P"][lines]
@@ -864,7 +871,11 @@ class Interpreter:
                     al[np.argmax(badp)], "P on an arc must be a positive integer number of turns"
                 )
             turns = np.where(pt, pv - 1, 0)
-        sweep = g.arc_sweep(s, e, centre, normal, ccw, turns)
+        # Row by row, in pieces: the same numbers, bounded temporaries.
+        sweep = np.empty(arc_l.size)
+        for a in range(0, arc_l.size, ARC_PIECE):
+            b = slice(a, a + ARC_PIECE)
+            sweep[b] = g.arc_sweep(s[b], e[b], centre[b], normal[b], ccw[b], turns[b])
         cols["center"][arc_l] = centre
         cols["normal"][arc_l] = normal
         cols["sweep"][arc_l] = sweep

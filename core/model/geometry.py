@@ -192,6 +192,10 @@ def arc_points(
     return base + rot + rise
 
 
+#: Points computed together by :func:`sample_arcs`.
+SAMPLE_PIECE = 262_144
+
+
 def sample_arcs(
     start: NDArray[np.float64],
     center: NDArray[np.float64],
@@ -210,10 +214,21 @@ def sample_arcs(
     """
     counts = np.asarray(counts, dtype=np.int64)
     m = counts + 1
-    owner = np.repeat(np.arange(len(m)), m)
-    first = np.cumsum(m) - m
-    k = np.arange(owner.size) - first[owner]
-    frac = k / counts[owner]
-    return arc_points(
-        start[owner], center[owner], normal[owner], ccw[owner], sweep[owner], pitch[owner], frac
-    )
+    ends = np.cumsum(m)
+    out = np.empty((int(ends[-1]) if ends.size else 0, 3))
+    # In pieces of whole arcs of about SAMPLE_PIECE points: every point is computed from its
+    # own arc's row, so the pieces change nothing but the size of the (points, 3)
+    # temporaries (4M points at once: 870 MB).
+    a = 0
+    while a < m.size:
+        done = ends[a - 1] if a else 0
+        b = max(int(np.searchsorted(ends, done + SAMPLE_PIECE, side="right")), a + 1)
+        owner = np.repeat(np.arange(a, b), m[a:b])
+        first = ends[a:b] - m[a:b]
+        k = np.arange(done, ends[b - 1]) - first[owner - a]
+        frac = k / counts[owner]
+        out[done : ends[b - 1]] = arc_points(
+            start[owner], center[owner], normal[owner], ccw[owner], sweep[owner], pitch[owner], frac
+        )
+        a = b
+    return out
