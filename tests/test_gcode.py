@@ -627,3 +627,23 @@ def test_linuxcnc_g61_is_exact_path_and_g61_1_exact_stop(prefix):
     assert list(tp.path_mode) == [0, 0, 0, 0, exact, exact, 0]
     assert list(tp.tolerance[:4]) == [0.0, 0.0, 0.0, 0.0]
     assert np.isnan(tp.tolerance[4:]).all()
+
+
+def test_numbers_without_decimal_point_short_and_absurdly_long():
+    """A dimension word is "bare" (no decimal point, integer, nonzero) however long its
+    number: X10, Z-3, Y+3, I5 and a 40-digit X are; Y2.5, X1., Y.5, J5. and a 30-digit Y
+    ending in ".0" are not; G words never are."""
+    from adapters.gcode.lexer import Source, tokenize
+
+    text = (
+        b"G1 X10 Y2.5 Z-3\nX" + b"1" * 40 + b" Y" + b"2" * 30 + b".0\nX1. Y.5 Z0007\n"
+        b"G1 X-12 Y+3 I5 J5.\n"
+    )
+    w = tokenize(Source("t.nc", text))
+    got = [(chr(c), bool(b)) for c, b in zip(w.letter, w.bare, strict=True)]
+    assert got == [
+        ("G", False), ("X", True), ("Y", False), ("Z", True),
+        ("X", True), ("Y", False),
+        ("X", False), ("Y", False), ("Z", True),
+        ("G", False), ("X", True), ("Y", True), ("I", True), ("J", False),
+    ]  # fmt: skip

@@ -846,8 +846,11 @@ class Interpreter:
                 v["R"][lines[r_idx]] * scale[r_idx],
                 al[r_idx],
             )
-        r0 = g.norm(g.radial(s, centre, normal))
-        r1 = g.norm(g.radial(e, centre, normal))
+        r0, r1 = np.empty(arc_l.size), np.empty(arc_l.size)
+        for a in range(0, arc_l.size, ARC_PIECE):  # row by row: pieces change nothing
+            b = slice(a, a + ARC_PIECE)
+            r0[b] = g.norm(g.radial(s[b], centre[b], normal[b]))
+            r1[b] = g.norm(g.radial(e[b], centre[b], normal[b]))
         tiny = r0 < TOL.min_arc_radius
         if tiny.any():
             raise self.error(al[np.argmax(tiny)], "arc with zero radius")

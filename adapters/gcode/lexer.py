@@ -232,6 +232,9 @@ def _well_formed(
     )
 
 
+#: Numbers up to this many characters are checked for a decimal point column by column.
+SHORT_NUMBER = 24
+
 _DIMENSION = np.zeros(256, dtype=bool)
 for _ch in b"XYZIJKR":
     _DIMENSION[_ch] = True
@@ -248,11 +251,22 @@ def _bare_integers(
     bare = np.zeros(s.size, dtype=bool)
     cand = np.flatnonzero(_DIMENSION[letter] & (value == np.round(value)) & (value != 0))
     if cand.size:
-        lens = e[cand] - s[cand]
-        owner = np.repeat(np.arange(cand.size), lens)
-        offs = np.arange(owner.size) - np.repeat(np.cumsum(lens) - lens, lens)
-        isdot = c[s[cand][owner] + offs] == ord(".")
-        bare[cand] = np.bincount(owner, weights=isdot, minlength=cand.size) == 0
+        start, lens = s[cand], e[cand] - s[cand]
+        dot = np.zeros(cand.size, dtype=bool)
+        # Character k of every number at once (k up to SHORT_NUMBER; a shorter number looks
+        # at its own last character again): memory per word, not per character.
+        short = lens <= SHORT_NUMBER
+        last = start + lens - 1
+        for k in range(int(lens[short].max(initial=0))):
+            dot |= c[np.minimum(start + k, last)] == ord(".")
+        long = np.flatnonzero(~short)  # absurdly long numbers: character by character
+        if long.size:
+            ll = lens[long]
+            owner = np.repeat(np.arange(long.size), ll)
+            offs = np.arange(owner.size) - np.repeat(np.cumsum(ll) - ll, ll)
+            isdot = c[start[long][owner] + offs] == ord(".")
+            dot[long] = np.bincount(owner, weights=isdot, minlength=long.size) > 0
+        bare[cand] = ~dot
     return bare
 
 
