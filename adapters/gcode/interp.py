@@ -801,11 +801,17 @@ class Interpreter:
         lines = mi[arc_l]
         al = self.al[lines]
         plane = self.plane[lines]
-        normal = np.array([W.PLANE_NORMAL[int(p)] for p in (170, 180, 190)])[
-            np.searchsorted([170, 180, 190], plane)
-        ]
-        s = cols["start"][arc_l]
-        e = cols["end"][arc_l]
+        normals = np.array([W.PLANE_NORMAL[int(p)] for p in (170, 180, 190)])
+        if (plane == plane[0]).all():  # one plane (the usual case): one row, broadcast
+            normal = np.broadcast_to(
+                normals[np.searchsorted([170, 180, 190], plane[0])], (plane.size, 3)
+            )
+        else:
+            normal = normals[np.searchsorted([170, 180, 190], plane)]
+        if arc_l.size == mi.size:  # every move an arc: the columns themselves, not copies
+            s, e = cols["start"], cols["end"]
+        else:
+            s, e = cols["start"][arc_l], cols["end"][arc_l]
         ccw = self.kind[lines] == MoveKind.ARC_CCW
         scale = self.scale[lines]
         v, p = self.vals, self.pres
@@ -827,8 +833,9 @@ class Interpreter:
             raise self.error(
                 al[k], f"{word} word is not in the arc's plane (G{int(plane[k]) // 10})"
             )
-        off_in = off - off_n[:, None] * normal
-        del off, off_n  # (a million arcs: each (m, 3) array is 24 MB)
+        off -= off_n[:, None] * normal  # the offset in the plane (in place: 24 MB per 1M arcs)
+        off_in = off
+        del off, off_n
         absolute = np.flatnonzero(self.arc_distance[lines] == 901)
         centre = s + off_in  # incremental centres (G91.1, the default) ...
         if absolute.size:  # ... and absolute ones (G90.1): the offset in the start's plane
