@@ -17,23 +17,7 @@ skip() {
 if command -v chromium >/dev/null 2>&1 || command -v chromium-browser >/dev/null 2>&1; then
     exit 0
 fi
-if [ "$(id -u)" -eq 0 ]; then
-    as_root=()
-elif command -v sudo >/dev/null 2>&1 && sudo -n true >/dev/null 2>&1; then
-    as_root=(sudo -n)
-else
-    skip "Chromium is missing and installing it needs root or passwordless sudo"
-fi
-command -v apt-get >/dev/null 2>&1 || skip "Chromium is missing and there is no apt-get"
-echo "setup_browser: installing chromium (about 100 MB, once)" >&2
-export DEBIAN_FRONTEND=noninteractive
-log="$(mktemp)"
-if ! { "${as_root[@]}" apt-get update -qq &&
-    "${as_root[@]}" apt-get install -y -qq --no-install-recommends chromium; } >"$log" 2>&1; then
-    tail -n 5 "$log" >&2
-    rm -f "$log"
-    skip "apt-get could not install chromium"
-fi
-rm -f "$log"
+. "$(dirname "${BASH_SOURCE[0]}")/apt_install.sh"
+apt_install setup_browser chromium "about 100 MB" "Chromium is missing"
 command -v chromium >/dev/null 2>&1 || skip "chromium is installed but not on the PATH"
 echo "setup_browser: $(chromium --version 2>/dev/null | head -n 1) is installed" >&2

@@ -19,25 +19,8 @@ skip() {
 }
 
 if ! command -v mcs >/dev/null 2>&1; then
-    if [ "$(id -u)" -eq 0 ]; then
-        as_root=()
-    elif command -v sudo >/dev/null 2>&1 && sudo -n true >/dev/null 2>&1; then
-        as_root=(sudo -n)
-    else
-        skip "Mono's mcs is missing and installing mono-devel needs root or passwordless sudo"
-    fi
-    command -v apt-get >/dev/null 2>&1 ||
-        skip "Mono's mcs is missing and there is no apt-get to install mono-devel with"
-    echo "setup_esprit_emulation: installing mono-devel (about 330 MB, once)" >&2
-    export DEBIAN_FRONTEND=noninteractive
-    log="$(mktemp)"
-    if ! { "${as_root[@]}" apt-get update -qq &&
-        "${as_root[@]}" apt-get install -y -qq --no-install-recommends mono-devel; } >"$log" 2>&1; then
-        tail -n 5 "$log" >&2
-        rm -f "$log"
-        skip "apt-get could not install mono-devel"
-    fi
-    rm -f "$log"
+    . "$root/scripts/apt_install.sh"
+    apt_install setup_esprit_emulation mono-devel "about 330 MB" "Mono's mcs is missing"
     command -v mcs >/dev/null 2>&1 || skip "mono-devel is installed but mcs is not on PATH"
 fi
 

@@ -17,24 +17,8 @@ skip() {
 if /usr/bin/python3 -c "import gcode" >/dev/null 2>&1; then
     exit 0
 fi
-if [ "$(id -u)" -eq 0 ]; then
-    as_root=()
-elif command -v sudo >/dev/null 2>&1 && sudo -n true >/dev/null 2>&1; then
-    as_root=(sudo -n)
-else
-    skip "LinuxCNC is missing and installing linuxcnc-uspace needs root or passwordless sudo"
-fi
-command -v apt-get >/dev/null 2>&1 || skip "LinuxCNC is missing and there is no apt-get"
-echo "setup_linuxcnc: installing linuxcnc-uspace (about 80 MB, once)" >&2
-export DEBIAN_FRONTEND=noninteractive
-log="$(mktemp)"
-if ! { "${as_root[@]}" apt-get update -qq &&
-    "${as_root[@]}" apt-get install -y -qq --no-install-recommends linuxcnc-uspace; } >"$log" 2>&1; then
-    tail -n 5 "$log" >&2
-    rm -f "$log"
-    skip "apt-get could not install linuxcnc-uspace"
-fi
-rm -f "$log"
+. "$(dirname "${BASH_SOURCE[0]}")/apt_install.sh"
+apt_install setup_linuxcnc linuxcnc-uspace "about 80 MB" "LinuxCNC is missing"
 /usr/bin/python3 -c "import gcode" >/dev/null 2>&1 ||
     skip "linuxcnc-uspace is installed but /usr/bin/python3 cannot import gcode"
 echo "setup_linuxcnc: LinuxCNC's interpreter is installed" >&2
