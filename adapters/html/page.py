@@ -49,6 +49,7 @@ from core.view.annotations import (
     LENGTH_LABELS,
     REDUCTION_COLOURS,
     Annotations,
+    check_drawable,
 )
 
 if TYPE_CHECKING:
@@ -447,12 +448,7 @@ def panel_data(
             f"annotations must have one class per move ({n}), got {np.shape(ann.move_class)} "
             f"and {np.shape(ann.length_class)}"
         )
-    bad = ~(np.isfinite(tp.start).all(axis=1) & np.isfinite(tp.end).all(axis=1))
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise ValueError(
-            f"{tp.source}:{tp.line[i]}: move {i} has a non-finite end point; it cannot be drawn"
-        )
+    check_drawable(tp)
     lo, hi = _box(tp)
     if centre is None:
         centre = 0.5 * (lo + hi)

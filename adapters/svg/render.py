@@ -43,7 +43,7 @@ from core.model import geometry as g
 from core.model.text import printable
 from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, ToolPath
-from core.view.annotations import Annotations
+from core.view.annotations import Annotations, check_drawable
 from core.view.targets import COLOURINGS, VIEWS
 from core.view.zones import Zone
 
@@ -978,12 +978,7 @@ def _check(tp: ToolPath, ann: Annotations) -> None:
                 f"annotations.{name} must have shape {m} like annotations.junction, "
                 f"got {np.shape(getattr(ann, name))}"
             )
-    bad = ~(np.isfinite(tp.start).all(axis=1) & np.isfinite(tp.end).all(axis=1))
-    if bad.any():
-        i = int(np.argmax(bad))
-        raise ValueError(
-            f"{tp.source}:{tp.line[i]}: move {i} has a non-finite end point; it cannot be drawn"
-        )
+    check_drawable(tp)
     j = np.asarray(ann.junction)
     if j.size and (j.min() < 0 or j.max() >= n - 1):
         raise ValueError(f"annotations.junction must lie in 0..{n - 2}, got {j.min()}..{j.max()}")

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from core.engine.indicators import REDUCTION_LABELS, Evaluation, reduction_class
 from core.engine.profile import Profile, build_profile
+from core.model.toolpath import ToolPath
 from core.view.zones import Zone, find_zones
 
 #: Colours of the reduction classes, green (0-10 %) to red (> 90 %), as in Figure 11.
@@ -95,6 +96,18 @@ class Annotations:
     rapid_colour: str = RAPID_COLOUR
     speed_share: NDArray[np.float32] | None = None
     speed_class: NDArray[np.int8] | None = None
+
+
+def check_drawable(tp: ToolPath) -> None:
+    """Raise ValueError, naming the move and its line, if an end point of ``tp`` is not
+    finite (the readers' range checks keep this from happening; a path built in code can
+    still hold one, and no display can place it)."""
+    bad = ~(np.isfinite(tp.start).all(axis=1) & np.isfinite(tp.end).all(axis=1))
+    if bad.any():
+        i = int(np.argmax(bad))
+        raise ValueError(
+            f"{tp.source}:{tp.line[i]}: move {i} has a non-finite end point; it cannot be drawn"
+        )
 
 
 def length_class(ev: Evaluation) -> NDArray[np.int8]:
