@@ -387,19 +387,26 @@ def test_diagnose_refuses_a_trace_of_another_program(tmp_path):
     assert not (tmp_path / "o.json").exists()
 
 
+def _override_diagnosis(nc, scale):
+    """The zigzag recorded with a feed override ``scale``, diagnosed with the override alone:
+    the diagnosis, the machine and the effects."""
+    tp = zigzag()
+    m = machine(jerk=(INF, INF, INF))
+    effects = {"feed_override": nc.effects()["feed_override"]}
+    base = Setup(machine=m)
+    eff = effects["feed_override"]
+    tr = synthetic_trace(nc, tp, eff.apply(base, eff.defaults(m) | {"scale": scale}))
+    d = nc.diagnose([(tp, [align(tp, tr)], ["run1.csv"])], base, "profile", effects)
+    return d, m, effects
+
+
 def test_a_fit_at_its_bound_warns_that_the_machine_file_is_wrong(nc):
     """A machine three times slower than its file (feed override 0.3) diagnosed with the feed
     override alone, whose scale stops at 0.5: the fit runs to 0.5 and the report warns that
     the machine file may be wrong (issue 14) instead of only suggesting scale = 0.5."""
     from core.cli.diagnosis_report import report, to_json
 
-    tp = zigzag()
-    m = machine(jerk=(INF, INF, INF))
-    effects = {"feed_override": nc.effects()["feed_override"]}
-    base = Setup(machine=m)
-    eff = effects["feed_override"]
-    tr = synthetic_trace(nc, tp, eff.apply(base, eff.defaults(m) | {"scale": 0.3}))
-    d = nc.diagnose([(tp, [align(tp, tr)], ["run1.csv"])], base, "profile", effects)
+    d, m, effects = _override_diagnosis(nc, 0.3)
     assert d.effects[0].params["scale"] == pytest.approx(0.5, abs=0.005)
     text = report(d, program="p.ngc", machine="m", labels=["run1.csv"], effects=effects)
     assert "feed_override fitted scale=0.5, at its bound (0.5 to 1.5)" in text
@@ -411,13 +418,7 @@ def test_a_fit_inside_its_bounds_has_no_warning(nc):
     """An override of 0.8, inside 0.5-1.5: named, and no warning."""
     from core.cli.diagnosis_report import at_bound, report
 
-    tp = zigzag()
-    m = machine(jerk=(INF, INF, INF))
-    effects = {"feed_override": nc.effects()["feed_override"]}
-    base = Setup(machine=m)
-    eff = effects["feed_override"]
-    tr = synthetic_trace(nc, tp, eff.apply(base, eff.defaults(m) | {"scale": 0.8}))
-    d = nc.diagnose([(tp, [align(tp, tr)], ["run1.csv"])], base, "profile", effects)
+    d, _, effects = _override_diagnosis(nc, 0.8)
     text = report(d, program="p.ngc", machine="m", labels=["run1.csv"], effects=effects)
     assert "WARNING" not in text
     # log parameters are judged in log space: of 0.25-4, 3.9 is ln(3.9 / 0.25) / ln 16 =
