@@ -93,3 +93,17 @@ def path(moves: list[dict], feed: float = 100.0) -> ToolPath:
             cols["kind"][arcs] == MoveKind.ARC_CCW,
         )
     return ToolPath(**cols)
+
+
+def diagnose_page(tmp_path: Path) -> Path:
+    """The HTML page of ``ncperf diagnose --html`` on the Fig. 3 spiral against its own
+    predicted trace (``ncperf profile``, linuxcnc-sim), the feed override alone tried."""
+    from core.cli import main
+
+    prog = ROOT / "examples" / "fig3_semicircle_spiral.ngc"
+    trace = tmp_path / "t.csv"
+    assert main(["profile", str(prog), "--machine", "linuxcnc-sim", "--csv", str(trace)]) == 0
+    out = tmp_path / "d.html"
+    args = ["diagnose", str(prog), str(trace), "--machine", "linuxcnc-sim"]
+    assert main([*args, "--effects", "feed_override", "--html", str(out)]) == 0
+    return out

@@ -16,7 +16,7 @@ import adapters.html
 import adapters.svg
 from core import FileTarget, HtmlTarget, Ncperf, load_preset, make_plugin_manager
 from core.cli import main
-from tests.conftest import ROOT, path
+from tests.conftest import ROOT, diagnose_page, path
 
 PLUGINS = (
     "plugins.tangential",
@@ -279,12 +279,7 @@ def test_compare_html_ranked(tmp_path):
 
 def test_diagnose_html_has_gap(tmp_path):
     """diagnose --html opens coloured by gap, with the gap per move and the measured feed."""
-    prog = EXAMPLES / "fig3_semicircle_spiral.ngc"
-    trace = tmp_path / "t.csv"
-    assert main(["profile", str(prog), "--machine", "linuxcnc-sim", "--csv", str(trace)]) == 0
-    out = tmp_path / "d.html"
-    args = ["diagnose", str(prog), str(trace), "--machine", "linuxcnc-sim"]
-    assert main([*args, "--effects", "feed_override", "--html", str(out)]) == 0
+    out = diagnose_page(tmp_path)
     _, meta, blobs = read_page(out)
     assert meta["kind"] == "diagnose" and meta["default_mode"] == "gap"
     (p,) = meta["panels"]

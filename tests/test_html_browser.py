@@ -23,7 +23,7 @@ import numpy as np
 import pytest
 
 from core.cli import main
-from tests.conftest import ROOT
+from tests.conftest import ROOT, diagnose_page
 
 EXAMPLES = ROOT / "examples"
 #: The reduction classes, green (0-10 %) to red (> 90 %) (paper Fig. 11).
@@ -292,12 +292,7 @@ def test_compare_page_side_by_side(browser, tmp_path):
 def test_diagnose_page_coloured_by_gap(browser, tmp_path):
     """diagnose --html opens coloured by the gap: the 'within 10 %' colour is drawn, the
     legend says gap, and hovering shows the measured-minus-predicted share."""
-    prog = EXAMPLES / "fig3_semicircle_spiral.ngc"
-    trace = tmp_path / "t.csv"
-    assert main(["profile", str(prog), "--machine", "linuxcnc-sim", "--csv", str(trace)]) == 0
-    out = tmp_path / "d.html"
-    args = ["diagnose", str(prog), str(trace), "--machine", "linuxcnc-sim"]
-    assert main([*args, "--effects", "feed_override", "--html", str(out)]) == 0
+    out = diagnose_page(tmp_path)
     p = Page(browser, out)
     try:
         assert p.errors == []
