@@ -50,6 +50,7 @@ from core.view.annotations import (
     REDUCTION_COLOURS,
     Annotations,
     check_drawable,
+    speed_share,
 )
 
 if TYPE_CHECKING:
@@ -332,12 +333,7 @@ def _speed_arrays(
     n, is_feed = tp.n, tp.is_feed
     share = ann.speed_share
     if share is None and pr is not None:
-
-        def own_share(s: slice) -> NDArray:
-            with np.errstate(divide="ignore", invalid="ignore"):
-                return np.minimum(tp.length[s] / (pr.time[s] * tp.feed[s]), 1.0)
-
-        share = _per_move(n, np.float64, own_share)
+        share = _per_move(n, np.float64, lambda s: speed_share(pr, s))
     if share is not None:
         spec["share"] = blobs.add(
             _per_move(n, np.uint16, lambda s: _u16(np.where(is_feed[s], share[s], np.nan), 1.0))

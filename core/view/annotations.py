@@ -120,13 +120,15 @@ def length_class(ev: Evaluation) -> NDArray[np.int8]:
     return np.where(tp.is_feed, cls, -1).astype(np.int8)
 
 
-def speed_share(profile: Profile) -> NDArray[np.float64]:
-    """(n,) mean predicted speed of each move over its programmed feed (length / time / F);
-    NaN for rapids. A move the profile runs at F has share 1."""
+def speed_share(
+    profile: Profile, k: NDArray[np.int64] | slice = slice(None)
+) -> NDArray[np.float64]:
+    """Mean predicted speed of moves ``k`` (all by default) over their programmed feed
+    (length / time / F); NaN for rapids. A move the profile runs at F has share 1."""
     tp = profile.toolpath
     with np.errstate(invalid="ignore", divide="ignore"):
-        share = tp.length / (profile.time * tp.feed)
-    return np.where(tp.is_feed, np.minimum(share, 1.0), np.nan)
+        share = tp.length[k] / (profile.time[k] * tp.feed[k])
+    return np.where(tp.is_feed[k], np.minimum(share, 1.0), np.nan)
 
 
 def build_annotations(
