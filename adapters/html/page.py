@@ -40,7 +40,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.diagnosis.rules import GAP_COLOURS, GAP_LABELS
-from core.engine.indicators import REDUCTION_LABELS, reduction_class
+from core.engine.indicators import REDUCTION_LABELS
 from core.model import geometry as g
 from core.model.text import printable, printable_tree
 from core.model.toolpath import MoveKind, ToolPath
@@ -50,6 +50,7 @@ from core.view.annotations import (
     REDUCTION_COLOURS,
     Annotations,
     check_drawable,
+    speed_class,
     speed_share,
 )
 
@@ -340,13 +341,7 @@ def _speed_arrays(
         )
     sclass = ann.speed_class
     if sclass is None and share is not None:
-        sclass = _per_move(
-            n,
-            np.int8,
-            lambda s: np.where(
-                is_feed[s], reduction_class(1.0 - np.nan_to_num(share[s], nan=1.0)), -1
-            ).astype(np.int8),
-        )
+        sclass = _per_move(n, np.int8, lambda s: speed_class(share[s], is_feed[s]))
     if sclass is not None:
         spec["sclass"] = blobs.add(np.asarray(sclass, dtype=np.int8))
 

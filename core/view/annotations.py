@@ -131,6 +131,12 @@ def speed_share(
     return np.where(tp.is_feed[k], np.minimum(share, 1.0), np.nan)
 
 
+def speed_class(share: NDArray[np.floating], is_feed: NDArray[np.bool_]) -> NDArray[np.int8]:
+    """Reduction class 0..5 of ``1 - share`` (a :func:`speed_share`), -1 for rapids."""
+    cls = reduction_class(1.0 - np.nan_to_num(share, nan=1.0))
+    return np.where(is_feed, cls, -1).astype(np.int8)
+
+
 def build_annotations(
     ev: Evaluation, profile: Profile | None = None, *, zones: int = 10
 ) -> Annotations:
@@ -141,7 +147,6 @@ def build_annotations(
     worst = find_zones(ev, profile, zones)  # first: its peak is the stage's (1M moves)
     mc = np.where(tp.is_feed, reduction_class(np.nan_to_num(ev.element_reduction)), -1)
     share = speed_share(profile)
-    sc = np.where(tp.is_feed, reduction_class(1.0 - np.nan_to_num(share, nan=1.0)), -1)
     counts = []
     for k in range(len(ev.indicator_names)):
         nj = int(np.count_nonzero((ev.junction_indicator == k) & (ev.junction_limit != 0)))
@@ -163,5 +168,5 @@ def build_annotations(
         indicator_counts=tuple(counts),
         labels=ev.labels,
         speed_share=share.astype(np.float32),
-        speed_class=sc.astype(np.int8),
+        speed_class=speed_class(share, tp.is_feed),
     )
