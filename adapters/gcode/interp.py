@@ -22,6 +22,7 @@ from adapters.gcode.lexer import Source, Words
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
 from core.model.limits import MAX_TOOL
+from core.model.pieces import piecewise
 from core.model.tolerances import TOL
 from core.model.toolpath import (
     POINTS_DROPPED,
@@ -32,8 +33,6 @@ from core.model.toolpath import (
 )
 
 INCH = 25.4
-#: Arcs whose sweep is computed together (bounded (m, 3) temporaries on arc-heavy programs).
-ARC_PIECE = 131_072
 AXIS_LETTERS = "XYZ"
 CENTRE_LETTERS = "IJK"
 ALLOWED = set("GMXYZIJKRFPQNSTHDO")
@@ -853,11 +852,10 @@ class Interpreter:
                 v["R"][lines[r_idx]] * scale[r_idx],
                 al[r_idx],
             )
-        r0, r1 = np.empty(arc_l.size), np.empty(arc_l.size)
-        for a in range(0, arc_l.size, ARC_PIECE):  # row by row: pieces change nothing
-            b = slice(a, a + ARC_PIECE)
-            r0[b] = g.norm(g.radial(s[b], centre[b], normal[b]))
-            r1[b] = g.norm(g.radial(e[b], centre[b], normal[b]))
+        # Row by row, in pieces: the same numbers, bounded (m, 3) temporaries.
+        m = arc_l.size
+        r0 = piecewise(m, np.float64, lambda b: g.norm(g.radial(s[b], centre[b], normal[b])))
+        r1 = piecewise(m, np.float64, lambda b: g.norm(g.radial(e[b], centre[b], normal[b])))
         tiny = r0 < TOL.min_arc_radius
         if tiny.any():
             raise self.error(al[np.argmax(tiny)], "arc with zero radius")
@@ -881,11 +879,9 @@ class Interpreter:
                     al[np.argmax(badp)], "P on an arc must be a positive integer number of turns"
                 )
             turns = np.where(pt, pv - 1, 0)
-        # Row by row, in pieces: the same numbers, bounded temporaries.
-        sweep = np.empty(arc_l.size)
-        for a in range(0, arc_l.size, ARC_PIECE):
-            b = slice(a, a + ARC_PIECE)
-            sweep[b] = g.arc_sweep(s[b], e[b], centre[b], normal[b], ccw[b], turns[b])
+        sweep = piecewise(
+            m, np.float64, lambda b: g.arc_sweep(s[b], e[b], centre[b], normal[b], ccw[b], turns[b])
+        )
         cols["center"][arc_l] = centre
         cols["normal"][arc_l] = normal
         cols["sweep"][arc_l] = sweep

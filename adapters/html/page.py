@@ -31,7 +31,7 @@ import base64
 import json
 import math
 import zlib
-from collections.abc import Callable, Iterator
+from collections.abc import Iterator
 from dataclasses import dataclass, field
 from importlib import resources
 from typing import TYPE_CHECKING, Any
@@ -42,6 +42,7 @@ from numpy.typing import NDArray
 from core.diagnosis.rules import GAP_COLOURS, GAP_LABELS
 from core.engine.indicators import REDUCTION_LABELS
 from core.model import geometry as g
+from core.model.pieces import pieces, piecewise
 from core.model.text import printable, printable_tree
 from core.model.toolpath import MoveKind, ToolPath
 from core.view.annotations import (
@@ -78,25 +79,7 @@ PER_MIN = 60.0
 U16 = 65535
 #: Bit of ``npts`` that says the move's own start point comes first.
 BREAK = 0x80
-#: Elements converted or compressed at a time: the float64 temporaries of a per-move array
-#: stay a few MB however long the path (1M moves: 325 MB over the analysis when whole).
-PIECE = 1 << 18
-
 _KIND_RAPID, _KIND_LINE, _KIND_ARC = 0, 1, 2
-
-
-def _pieces(n: int) -> Iterator[slice]:
-    for i in range(0, n, PIECE):
-        yield slice(i, min(i + PIECE, n))
-
-
-def _per_move(n: int, dtype: type, f: Callable[[slice], NDArray]) -> NDArray:
-    """``f`` over the moves piece by piece into one (n,) array of ``dtype``: f is elementwise,
-    so the values are those of f over all moves at once."""
-    out: NDArray = np.empty(n, dtype=dtype)
-    for s in _pieces(n):
-        out[s] = f(s)
-    return out
 
 
 def _read_asset(name: str) -> str:
@@ -165,7 +148,7 @@ def _stored_pieces(a: NDArray, delta: bool) -> Iterator[memoryview]:
     rows = a.reshape(-1, a.shape[-1]) if delta else a.reshape(1, -1)
     for plane in range(size):
         for row in rows:
-            for s in _pieces(row.size):
+            for s in pieces(row.size):
                 v = row[s]
                 if delta:
                     d = np.empty_like(v)
@@ -238,7 +221,7 @@ def geometry(tp: ToolPath, quantum: float, centre: NDArray[np.float64]) -> Geome
     brk = np.ones(n, dtype=bool)
     if n > 1:
         # Move k + 1 starts where move k ends unless their grid points differ.
-        brk[1:] = _per_move(
+        brk[1:] = piecewise(
             n - 1,
             np.bool_,
             lambda s: np.any(
@@ -270,7 +253,7 @@ def geometry(tp: ToolPath, quantum: float, centre: NDArray[np.float64]) -> Geome
         pts[np.repeat(first[arcs], m)[inner] + local[inner]] = samples[inner]
     # Where moves join, the shared point is the previous end (written last, below).
     joined = np.flatnonzero(~brk)
-    for s in _pieces(joined.size):
+    for s in pieces(joined.size):
         pts[first[joined[s]]] = tp.end[joined[s] - 1]
     npts = add.astype(np.uint8)  # 1..ARC_MAX_SEGMENTS
     npts[brk] |= BREAK
@@ -305,12 +288,12 @@ def _name_index(ind: NDArray, lim: NDArray, nlab: int) -> NDArray[np.int16]:
         b = lim[s].astype(np.int64)
         return np.where((i >= 0) & (b >= 0), i * max(nlab, 1) + b, -1).astype(np.int16)
 
-    return _per_move(ind.shape[0], np.int16, index)
+    return piecewise(ind.shape[0], np.int16, index)
 
 
 def _feed_f32(is_feed: NDArray[np.bool_], feed: NDArray) -> NDArray[np.float32]:
     """A feed per move (mm/s) in mm/min as float32, NaN for rapids."""
-    return _per_move(
+    return piecewise(
         is_feed.shape[0],
         np.float32,
         lambda s: np.where(is_feed[s], feed[s] * PER_MIN, np.nan).astype(np.float32),
@@ -334,14 +317,14 @@ def _speed_arrays(
     n, is_feed = tp.n, tp.is_feed
     share = ann.speed_share
     if share is None and pr is not None:
-        share = _per_move(n, np.float64, lambda s: speed_share(pr, s))
+        share = piecewise(n, np.float64, lambda s: speed_share(pr, s))
     if share is not None:
         spec["share"] = blobs.add(
-            _per_move(n, np.uint16, lambda s: _u16(np.where(is_feed[s], share[s], np.nan), 1.0))
+            piecewise(n, np.uint16, lambda s: _u16(np.where(is_feed[s], share[s], np.nan), 1.0))
         )
     sclass = ann.speed_class
     if sclass is None and share is not None:
-        sclass = _per_move(n, np.int8, lambda s: speed_class(share[s], is_feed[s]))
+        sclass = piecewise(n, np.int8, lambda s: speed_class(share[s], is_feed[s]))
     if sclass is not None:
         spec["sclass"] = blobs.add(np.asarray(sclass, dtype=np.int8))
 
@@ -352,7 +335,7 @@ def _profile_arrays(blobs: Blobs, tp: ToolPath, pr: Profile, spec: dict[str, Any
     top = [
         float(f.max())
         for v in speeds
-        for s in _pieces(v.size)
+        for s in pieces(v.size)
         if (f := v[s][np.isfinite(v[s])]).size
     ]
     vmax = max(top) if top else 0.0
@@ -361,14 +344,14 @@ def _profile_arrays(blobs: Blobs, tp: ToolPath, pr: Profile, spec: dict[str, Any
     n = tp.n
     out16 = np.empty((3, n), dtype=np.uint16)
     for row, v in zip(out16, speeds, strict=True):
-        for s in _pieces(n):
+        for s in pieces(n):
             row[s] = _u16(v[s], vmax)
     spec["v"] = blobs.add(out16)
     del out16
     # Piece by piece with Profile.phases_of (the arithmetic of Profile.phases, which would
     # keep five (n,) arrays on the profile).
     out8 = np.empty((4, n), dtype=np.uint8)
-    for s in _pieces(n):
+    for s in pieces(n):
         _, _, d_up, d_dn, _ = pr.phases_of(s)
         length = tp.length[s]
         with np.errstate(divide="ignore", invalid="ignore"):
@@ -451,7 +434,7 @@ def panel_data(
         lo, hi = geo.points.min(axis=0), geo.points.max(axis=0)
     # Stored axis by axis (3, p); the float points go once on the grid.
     q = np.empty((3, geo.points.shape[0]), dtype=np.int32)
-    for s in _pieces(geo.points.shape[0]):
+    for s in pieces(geo.points.shape[0]):
         q[:, s] = np.rint((geo.points[s] - centre) / quantum).astype(np.int32).T
     npts = geo.npts
     del geo
@@ -493,7 +476,7 @@ def panel_data(
         spec["jclass"] = blobs.add(np.asarray(ann.junction_class, dtype=np.int8))
         jfeed = np.asarray(ann.junction_feed)
         spec["jfeed"] = blobs.add(
-            _per_move(j.size, np.float32, lambda s: (jfeed[s] * PER_MIN).astype(np.float32))
+            piecewise(j.size, np.float32, lambda s: (jfeed[s] * PER_MIN).astype(np.float32))
         )
         spec["jname"] = blobs.add(_name_index(ann.junction_cause, ann.junction_limit, nlab))
     del j

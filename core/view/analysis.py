@@ -9,17 +9,16 @@ import math
 from dataclasses import dataclass
 
 import numpy as np
+from numpy.typing import NDArray
 
 from core.engine.indicators import Evaluation
 from core.engine.profile import Profile
 from core.model import geometry as g
 from core.model.errors import InputError
+from core.model.pieces import piecewise
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.view.annotations import Annotations
-
-#: Moves per piece where a headline figure is computed in pieces (bounded temporaries).
-PIECE = 262_144
 
 
 @dataclass(frozen=True, eq=False)
@@ -52,17 +51,19 @@ def at_feed_share(profile: Profile, fraction: float = 0.9) -> float:
     if not feed.size:
         return 0.0
     length = tp.length
-    fast = np.empty(feed.size)
-    for a in range(0, feed.size, PIECE):  # in pieces: bounded temporaries, the same numbers
-        f = feed[a : a + PIECE]
+
+    def fast(s: slice) -> NDArray[np.float64]:  # the feed length run at fraction F or more
+        f = feed[s]
         thr = fraction * tp.feed[f]
         v0, v1, vp = profile.v_entry[f], profile.v_exit[f], profile.v_peak[f]
         up = np.maximum((thr**2 - v0**2) / (2 * profile.a_up[f]), 0.0)
         down = np.maximum((thr**2 - v1**2) / (2 * profile.a_down[f]), 0.0)
         holds = profile.hold_start[f] + profile.hold_end[f]  # run at the boundary speeds
         reaches = vp >= thr * (1 - TOL.float_slack)
-        fast[a : a + PIECE] = np.where(reaches, np.maximum(length[f] - holds - up - down, 0.0), 0.0)
-    return float(fast.sum() / length[feed].sum())
+        return np.where(reaches, np.maximum(length[f] - holds - up - down, 0.0), 0.0)
+
+    # in pieces: bounded temporaries, the same numbers
+    return float(piecewise(feed.size, np.float64, fast).sum() / length[feed].sum())
 
 
 def totals(an: Analysis) -> dict[str, float | int]:
