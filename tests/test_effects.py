@@ -293,39 +293,3 @@ def test_block_time_on_blend_arcs(nc):
     ev = on.evaluation
     assert ev.junction_feed[0] == pytest.approx(r * math.pi / 2 / 0.012)
     assert ev.indicator_names[ev.junction_indicator[0]] == "ncu_capacity"
-
-
-def _zigzag_blends(nc, merge_blocks):
-    """Three lines, two 90-degree corners, the middle line 0.1 mm, TIT 0.01 mm, t_int 12 ms,
-    A 2500, F 6000 (100 mm/s): each blend arc has R = 0.0241421 mm (as above), tangent
-    length R tan 45 = R, arc length R pi / 2 = 0.0379224 mm."""
-    tp = path([{"end": (10, 0, 0)}, {"end": (10, 0.1, 0)}, {"end": (20, 0.1, 0)}])
-    m = machine(jerk=(INF, INF, INF))
-    m = dataclasses.replace(m, block_time_on_blends=True, blend_merge_blocks=merge_blocks)
-    return nc.predict(tp, Setup(machine=m)).evaluation
-
-
-def test_block_time_on_the_rest_between_blend_arcs(nc):
-    """Without merging, what is left of the 0.1 mm line between its two arcs, 0.1 - 2 R =
-    0.0517157 mm, is a segment of its own: at most 0.0517157 / 0.012 = 4.30964 mm/s (the
-    programmed block alone would allow 0.1 / 0.012 = 8.3333); the arcs at 3.16020 mm/s."""
-    ev = _zigzag_blends(nc, 0.0)
-    r = 0.01 * math.sin(math.pi / 4) / (1 - math.sin(math.pi / 4))
-    assert ev.element_feed[1] == pytest.approx((0.1 - 2 * r) / 0.012)
-    assert ev.element_feed[1] == pytest.approx(4.30964, abs=1e-5)
-    assert ev.labels[ev.element_limit[1]] == "block time (rest between blend arcs)"
-    assert ev.junction_feed == pytest.approx([3.16020, 3.16020], abs=1e-5)
-    # the long lines' rests (10 - R) are far above 100 mm/s x 12 ms: not capped
-    assert ev.element_feed[0] == ev.element_feed[2] == 100.0
-
-
-def test_a_short_rest_joins_the_following_blend_arc(nc):
-    """LinuxCNC runs a line whose rest would last under 4 servo periods at the next arc's
-    speed as part of that arc: with merging at 3.92 t_int, the rest 0.0517157 mm is under
-    3.92 x 0.012 x 7.76887 (sqrt(2500 R), the arc's speed) = 0.36545 mm, so the second arc is
-    0.0379224 + 0.0517157 = 0.0896381 mm long: 7.46984 mm/s; the rest has no cap of its own
-    (the block's 0.1 / 0.012 = 8.33333 remains), the first arc keeps 3.16020."""
-    ev = _zigzag_blends(nc, 3.92)
-    assert ev.junction_feed == pytest.approx([3.16020, 7.46984], abs=1e-5)
-    assert ev.element_feed[1] == pytest.approx(0.1 / 0.012)
-    assert ev.labels[ev.element_limit[1]] == "block time"

@@ -191,32 +191,19 @@ class Evaluation:
         return float(np.sum(tp.length[f] / self.element_feed[f]))
 
 
-#: The indicator name and limit labels of the block time on the segments a controller
-#: makes at corners: the arcs it inserts, and what is left of the blocks between them.
+#: The indicator name and limit label of the block time on inserted corner arcs.
 BLEND_INDICATOR = "ncu_capacity"
 BLEND_LABEL = "block time (blend arc)"
-REST_LABEL = "block time (rest between blend arcs)"
 
 
 def _blend_block_time(
     tp: ToolPath, machine: Machine, indicators: Sequence[Indicator]
 ) -> list[Indicator]:
-    """Model 3 on the segments a controller executes when it inserts arcs at corners
-    (LinuxCNC's planner; the paper's model 3 caps programmed blocks only):
-
-    - an inserted arc of length 2 travel (the junction's ``travel_mm`` on each side) lasts at
-      least the block time: the corner speed is at most 2 travel / t_int;
-    - a block trimmed by the arcs at its ends (their ``hold_mm``, the tangent lengths) keeps
-      a rest r = length - hold before - hold after, a segment of its own: its speed is at most
-      r / t_int;
-    - but a line whose rest would last less than ``blend_merge_blocks`` block times at the
-      following arc's speed is no segment of its own: the controller runs it as part of that
-      arc (LinuxCNC 2.9 blendmath.c ``blendCheckConsume``: ARC_BLEND_GAP_CYCLES = 4 servo
-      periods), whose length is then 2 travel + r.
-    """
+    """Model 3 on the arcs a controller inserts at corners: an arc of length 2 travel (the
+    junction's ``travel_mm`` on each side) lasts at least the block time, so the corner
+    speed is at most 2 travel / t_int (LinuxCNC's planner executes its blend arcs as
+    segments of their own; the paper's model 3 caps programmed blocks only)."""
     out = []
-    t_int = machine.interpolation_time
-    n = tp.n
     for ind in indicators:
         if ind.at != "junction" or "travel_mm" not in ind.values or ind.name == BLEND_INDICATOR:
             continue
@@ -225,50 +212,21 @@ def _blend_block_time(
         ok = travel > 0
         if not ok.any():
             continue
-        index, hold, travel = ind.index[ok], hold[ok], travel[ok]
-        corner = np.asarray(ind.feed, dtype=np.float64)[ok]
-        # what is left of each block between the arcs at its two ends
-        trimmed = np.zeros(n)
-        np.add.at(trimmed, index, hold)
-        np.add.at(trimmed, index + 1, hold)
-        rest = np.maximum(tp.length - trimmed, 0.0)
-        # a line before an arc whose rest is shorter than the merge time at the arc's speed
-        # (the corner speed, at most the programmed feed on either side) joins the arc
-        v_arc = np.fmin(corner, np.fmin(tp.feed[index], tp.feed[index + 1]))
-        merged = (
-            tp.is_feed[index]
-            & ~tp.is_arc[index]
-            & (rest[index] < machine.blend_merge_blocks * t_int * v_arc)
-        )
-        arc = 2.0 * travel + np.where(merged, rest[index], 0.0)
+        if ok.all():  # every corner has an arc: share the arrays, no copies
+            index = ind.index
+        else:
+            index, hold, travel = ind.index[ok], hold[ok], travel[ok]
         out.append(
             Indicator(
                 name=BLEND_INDICATOR,
                 at="junction",
                 index=index,
-                feed=arc / t_int,
+                feed=2.0 * travel / machine.interpolation_time,
                 limit=np.zeros(index.size, dtype=np.int64),
                 labels=(BLEND_LABEL,),
                 values={"hold_mm": hold, "travel_mm": travel},
             )
         )
-        # the rests that are segments of their own, where their block time binds
-        own = trimmed > 0
-        own[index[merged]] = False
-        own &= tp.is_feed & (rest < tp.feed * t_int)
-        i = np.flatnonzero(own)
-        if i.size:
-            out.append(
-                Indicator(
-                    name=BLEND_INDICATOR,
-                    at="element",
-                    index=i,
-                    feed=rest[i] / t_int,
-                    limit=np.zeros(i.size, dtype=np.int64),
-                    labels=(REST_LABEL,),
-                    values={"rest_mm": rest[i]},
-                )
-            )
     return out
 
 

@@ -14,8 +14,6 @@ The TOML file speaks the paper's units (m/min, m/s^2, m/s^3, s, mm); the
     curvature_transition_time = 0.012  # s, dt (model 2)
     max_path_feed = 15.0               # m/min, all axes together (optional; default none)
     block_time_on_blends = true        # t_int caps the inserted corner arcs too (optional)
-    blend_merge_blocks = 3.92          # a line left between arcs shorter than this many
-                                       # t_int at the arc's speed joins the arc (optional)
 
 Optional, for the readers (:mod:`core.model.setup`) and rotary axes::
 
@@ -77,9 +75,8 @@ CONTROLLER_KEYS = {
 #: Rotary axes' keys -> factor to deg/s, deg/s^2, deg/s^3 (max_jerk optional).
 ROTARY_KEYS = {"max_feed": 1.0 / 60.0, "max_acceleration": 1.0, "max_jerk": 1.0}
 #: Optional [controller] keys for the readers (see core.model.setup).
-#: Optional [controller] keys of the planner: max_path_feed (m/min), block_time_on_blends,
-#: blend_merge_blocks.
-PLANNER_KEYS = ("max_path_feed", "block_time_on_blends", "blend_merge_blocks")
+#: Optional [controller] keys of the planner: max_path_feed (m/min), block_time_on_blends.
+PLANNER_KEYS = ("max_path_feed", "block_time_on_blends")
 SETUP_KEYS = (
     "default_path_mode",
     "home",
@@ -145,11 +142,6 @@ class Machine:
     #: segments it executes like any block (LinuxCNC's planner); False: programmed blocks
     #: only, as the paper's model 3.
     block_time_on_blends: bool = False
-    #: With ``block_time_on_blends``: a line whose rest between the arcs at its ends would last
-    #: less than this many block times at the following arc's speed is run as part of that
-    #: arc, not as a segment of its own (LinuxCNC 2.9: ARC_BLEND_GAP_CYCLES = 4 servo periods,
-    #: 4 / 1.02 = 3.92 t_int); 0: every rest is a segment.
-    blend_merge_blocks: float = 0.0
     #: The gap (mm/s RMS over time) a prediction of this machine leaves on data it was not
     #: fitted on: the noise floor of the diagnosis (``[diagnosis] noise_floor`` in mm/min,
     #: written by ``ncperf calibrate``); NaN: none given (estimated from each trace).
@@ -393,10 +385,6 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
                 line=_line_of(text, "block_time_on_blends", "controller"),
             )
         planner["block_time_on_blends"] = flag
-    if "blend_merge_blocks" in ctrl:
-        planner["blend_merge_blocks"] = _number(
-            ctrl["blend_merge_blocks"], "blend_merge_blocks", "controller", source, text
-        )
     c = {k: _number(ctrl[k], k, "controller", source, text) * f for k, f in CONTROLLER_KEYS.items()}
     noise_floor = math.nan
     diag = data.get("diagnosis", {})
@@ -413,7 +401,6 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         setup=setup,
         max_path_feed=planner.get("max_path_feed", math.inf),
         block_time_on_blends=planner.get("block_time_on_blends", False),
-        blend_merge_blocks=planner.get("blend_merge_blocks", 0.0),
         noise_floor=noise_floor,
         name=name.strip(),
         max_feed=np.array(per_axis["max_feed"]),
