@@ -6,18 +6,19 @@ recorded in real time, about 25 min per seed set, and cached).
 
 Programs come from ten families (benchmarks/blind/families.py: random polygons, trochoidal
 slots, gears of chords, free-form chord paths, spiral pockets, a dome raster, engraving,
-thread milling, a 2.5D part, long kinked lines), each drawn from a seed. Seed sets are
-kept apart: ``tune`` (seeds 100-999), used while developing the effects and the decision
-rule, and ``score`` (seeds 9000-9999) and ``score2`` (seeds 20000-20999), run for the figures
-in the README and never for tuning. Every case is one program run through LinuxCNC 2.9's real planner on the harness's
-default mill with ONE setting changed (per-axis acceleration or speed, servo period, the
-path tolerance the run blends with, feed override below and above 1, the path speed limit,
-exact stop) or an effect put on the unchanged trace afterwards (a servo lag, a setpoint
-filter); the controls are the unchanged machine. Each trace is diagnosed on its own, as a
-user would: ``ncperf diagnose PROGRAM TRACE --machine linuxcnc-sim --baseline profile``
-with the program as written (not as changed for the run). Printed: every case, the
-confusion table (changed setting against the effect named first), the hit rate, the false
-alarms on the controls, and the cycle-time error of the preset on the controls.
+thread milling, a 2.5D part, long kinked lines), each drawn from a seed. Seed sets are kept
+apart: ``tune`` (seeds 100-999), used while developing the effects and the decision rule,
+and ``score`` (seeds 9000-9999) and ``score2`` (seeds 20000-20999), run for the figures in
+the README and never for tuning. Every case is one program run through LinuxCNC 2.9's real
+planner on the harness's default mill with ONE setting changed (per-axis acceleration or
+speed, servo period, the path tolerance the run blends with, feed override below and above
+1, the path speed limit, exact stop) or an effect put on the unchanged trace afterwards (a
+servo lag, a setpoint filter); the controls are the unchanged machine. Each trace is
+diagnosed on its own, as a user would: ``ncperf diagnose PROGRAM TRACE --machine linuxcnc-
+sim --baseline profile`` with the program as written (not as changed for the run). Printed:
+every case, the confusion table (changed setting against the effect named first), the hit
+rate, the false alarms on the controls, and the cycle-time error of the preset on the
+controls.
 """
 
 from __future__ import annotations

@@ -35,6 +35,25 @@ of t, for the acceleration. A 3-D corner adds the Z share the same way.
 
 TIT is the machine's path tolerance, or the program's own where it sets one
 (LinuxCNC ``G64 P``).
+
+LinuxCNC 2.9's planner (``corner_blending = "linuxcnc"``)
+---------------------------------------------------------
+Its source (``src/emc/tp/tp.c``, ``blendmath.c``; facts, not code, carried over) blends
+differently in three ways the profile feels on chord paths:
+
+* a junction whose direction change at the segments' speed v over one servo period T needs
+  little acceleration -- a = (v / T + A) |t2 - t1|_k / A_k below ``ARC_BLEND_KINK_RATIO``
+  = 0.1 on every axis k, twice that share next to a programmed arc -- is run through as
+  tangent, without an arc (``tpSetupTangent``): no hold, no corner limit;
+* the arc's tangent length is at most half of each block and what the tolerance allows,
+  d = min(l1 / 2, l2 / 2, sin(b/2) TIT / (1 - cos(b/2))), its radius R = d cot(b/2), its
+  speed v_plan the lower of sqrt(a_n R) and the faster segment's feed; but the arc is only
+  as large as that speed needs: R_plan = max(v_plan^2 / a_n, min(s / b, R)) with s the
+  distance of a parabolic blend at half the acceleration (``blendComputeParameters``);
+* along the arc the speed may change at half the acceleration of its plane
+  (``BLEND_ACC_RATIO_TANGENTIAL``): the profile takes that from the holds (core.engine.profile).
+
+The servo period is the machine's block time over ``TP_MIN_SEGMENT_CYCLES`` = 1.02.
 """
 
 from __future__ import annotations
@@ -149,6 +168,62 @@ def corner_feed(
     return cand[np.arange(cand.shape[0]), limit], limit
 
 
+#: LinuxCNC 2.9 (tp_types.h, blendmath.h, the ini default ARC_BLEND_KINK_RATIO): a segment
+#: lasts at least 1.02 servo periods; the tangent-kink threshold; the share of the plane's
+#: acceleration along a blend arc.
+LCNC_MIN_SEGMENT_CYCLES = 1.02
+LCNC_KINK_RATIO = 0.1
+LCNC_TANGENTIAL_RATIO = 0.5
+
+
+def plane_acceleration(
+    t1: NDArray[np.float64], t2: NDArray[np.float64], acc: NDArray
+) -> tuple[NDArray, NDArray]:
+    """(m,) the acceleration every direction in the plane of t1, t2 allows -- the lowest
+    limit of the axes that plane moves (LinuxCNC's inscribed circle of the axis limits in the
+    blend plane, for axis-aligned planes) -- and (m,) that axis (0, 1, 2)."""
+    moved = (np.abs(t1) > TOL.direction) | (np.abs(t2) > TOL.direction)
+    per_axis = np.where(moved, np.asarray(acc)[None, :], np.inf)
+    axis = per_axis.argmin(axis=1)
+    return per_axis[np.arange(axis.size), axis], axis
+
+
+def linuxcnc_blends(
+    tp: ToolPath, j: NDArray[np.int64], beta: NDArray, tit: NDArray, machine: Machine
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+    """LinuxCNC 2.9's corners (module docstring): the radius that limits the corner speed,
+    the arc's radius as inserted (R_plan; 0 where the junction is run as tangent), whether
+    it is tangent, and the normal speed limit sqrt(a_n R) of the plane's acceleration with
+    the axis that sets it."""
+    t1, t2 = tp.tangent_end[j], tp.tangent_start[j + 1]
+    acc = machine.max_acceleration
+    a_plane, axis = plane_acceleration(t1, t2, acc)
+    a_n = a_plane * machine.normal_acceleration_factor
+    t_int = machine.interpolation_time
+    servo = t_int / LCNC_MIN_SEGMENT_CYCLES
+    lp, ln = tp.length[j], tp.length[j + 1]
+    # each segment's top speed: its feed, and its length over one block time
+    cap_p = np.fmin(tp.feed[j], lp / t_int)
+    cap_n = np.fmin(tp.feed[j + 1], ln / t_int)
+    half = beta / 2.0
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        d_tol = np.sin(half) * tit / (2.0 * np.sin(beta / 4.0) ** 2)
+        d_geom = np.fmin(np.fmin(lp, ln) / 2.0, d_tol)
+        r_geom = d_geom / np.tan(half)
+        v_plan = np.fmin(np.sqrt(a_n * r_geom), np.fmax(cap_p, cap_n))
+        a_par = LCNC_TANGENTIAL_RATIO * a_plane
+        s_blend = np.fmin(np.sqrt(2.0 * a_par * d_geom), v_plan) / a_par * v_plan
+        r_plan = np.fmin(np.fmax(v_plan * v_plan / a_n, np.fmin(s_blend / beta, r_geom)), r_geom)
+        # tangent kinks: the acceleration of turning at full speed within one servo period
+        a_inst = np.fmin(cap_p, cap_n) / servo + a_plane
+        kink = np.max(np.abs(t2 - t1) * (a_inst[:, None] / acc[None, :]), axis=1)
+    kink = np.where(tp.is_arc[j] | tp.is_arc[j + 1], kink / LCNC_TANGENTIAL_RATIO, kink)
+    tangent = kink < LCNC_KINK_RATIO
+    r_geom = np.nan_to_num(np.maximum(r_geom, 0.0), nan=0.0)
+    r_plan = np.where(tangent, 0.0, np.nan_to_num(np.maximum(r_plan, 0.0), nan=0.0))
+    return r_geom, r_plan, tangent, np.sqrt(a_n * r_geom), axis
+
+
 @hookimpl
 def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     """Model 1 at every junction whose direction changes by more than TOL.collinear_angle."""
@@ -157,11 +232,21 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     beta = tp.turn_angle[j]
     j = j[beta > TOL.collinear_angle]
     beta = tp.turn_angle[j]
-    shorter = np.minimum(tp.length[j], tp.length[j + 1])
     tol = tp.tolerance[j]
     tit = np.where(np.isnan(tol), machine.path_tolerance, tol)
-    radius = inserted_radius(beta, shorter, tit)
+    tangent = None
+    if machine.corner_blending == "linuxcnc":
+        radius, inserted, tangent, v_plane, axis = linuxcnc_blends(tp, j, beta, tit, machine)
+    else:
+        shorter = np.minimum(tp.length[j], tp.length[j + 1])
+        radius = inserted = inserted_radius(beta, shorter, tit)
     feed, limit = corner_feed(tp.tangent_end[j], tp.tangent_start[j + 1], radius, machine)
+    if tangent is not None:
+        # LinuxCNC bounds the normal acceleration by the plane's, whatever the direction
+        lower = v_plane < feed
+        feed = np.where(lower, v_plane, feed)
+        limit = np.where(lower, LABELS.index("acceleration X") + axis, limit)
+        feed = np.where(tangent & (tit > 0.0), np.inf, feed)
     limit = np.where(tit == 0.0, LABELS.index(NO_BLEND), limit)
     return [
         Indicator(
@@ -177,8 +262,8 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             values={
                 "radius_mm": radius,
                 "angle_deg": np.degrees(beta),
-                "hold_mm": np.nan_to_num(radius * np.tan(beta / 2.0), nan=0.0, posinf=0.0),
-                "travel_mm": np.nan_to_num(radius * beta / 2.0, nan=0.0, posinf=0.0),
+                "hold_mm": np.nan_to_num(inserted * np.tan(beta / 2.0), nan=0.0, posinf=0.0),
+                "travel_mm": np.nan_to_num(inserted * beta / 2.0, nan=0.0, posinf=0.0),
             },
         )
     ]

@@ -191,19 +191,34 @@ class Evaluation:
         return float(np.sum(tp.length[f] / self.element_feed[f]))
 
 
-#: The indicator name and limit label of the block time on inserted corner arcs.
+#: The indicator name and limit labels of the block time on the segments a planner makes at
+#: corners: the arcs it inserts, and (LinuxCNC) what is left of the blocks between them.
 BLEND_INDICATOR = "ncu_capacity"
 BLEND_LABEL = "block time (blend arc)"
+REST_LABEL = "block time (rest between blend arcs)"
+#: LinuxCNC 2.9: a line whose rest between arcs would last under ARC_BLEND_GAP_CYCLES = 4
+#: servo periods (at the next arc's speed) is run as part of that arc (blendmath.c
+#: blendCheckConsume); a servo period is the block time over TP_MIN_SEGMENT_CYCLES = 1.02.
+LCNC_GAP_BLOCKS = 4.0 / 1.02
 
 
 def _blend_block_time(
     tp: ToolPath, machine: Machine, indicators: Sequence[Indicator]
 ) -> list[Indicator]:
-    """Model 3 on the arcs a controller inserts at corners: an arc of length 2 travel (the
-    junction's ``travel_mm`` on each side) lasts at least the block time, so the corner
-    speed is at most 2 travel / t_int (LinuxCNC's planner executes its blend arcs as
-    segments of their own; the paper's model 3 caps programmed blocks only)."""
+    """Model 3 on the segments a planner executes when it inserts arcs at corners (LinuxCNC;
+    the paper's model 3 caps programmed blocks only):
+
+    - an inserted arc of length 2 travel (the junction's ``travel_mm`` on each side) lasts at
+      least the block time: the corner speed is at most 2 travel / t_int;
+    - with ``corner_blending = "linuxcnc"``, a block trimmed by the arcs at its ends (their
+      ``hold_mm``, the tangent lengths) keeps a rest r = length - the holds, a segment of its
+      own: its speed is at most r / t_int; but a line whose rest would last under
+      LCNC_GAP_BLOCKS block times at the following arc's speed is run as part of that arc,
+      whose length is then 2 travel + r.
+    """
     out = []
+    t_int = machine.interpolation_time
+    rests = machine.corner_blending == "linuxcnc"
     for ind in indicators:
         if ind.at != "junction" or "travel_mm" not in ind.values or ind.name == BLEND_INDICATOR:
             continue
@@ -216,12 +231,43 @@ def _blend_block_time(
             index = ind.index
         else:
             index, hold, travel = ind.index[ok], hold[ok], travel[ok]
+        arc = 2.0 * travel
+        if rests:
+            corner = np.asarray(ind.feed, dtype=np.float64)[ok]
+            trimmed = np.zeros(tp.n)
+            np.add.at(trimmed, index, hold)
+            np.add.at(trimmed, index + 1, hold)
+            rest = np.maximum(tp.length - trimmed, 0.0)
+            v_arc = np.fmin(corner, np.fmax(tp.feed[index], tp.feed[index + 1]))
+            merged = (
+                tp.is_feed[index]
+                & ~tp.is_arc[index]
+                & (rest[index] < LCNC_GAP_BLOCKS * t_int * v_arc)
+            )
+            arc = arc + np.where(merged, rest[index], 0.0)
+            own = trimmed > 0
+            own[index[merged]] = False
+            # (a programmed arc is never run as part of a blend; only lines keep rests here)
+            own &= tp.is_feed & ~tp.is_arc & (rest < tp.feed * t_int)
+            i = np.flatnonzero(own)
+            if i.size:
+                out.append(
+                    Indicator(
+                        name=BLEND_INDICATOR,
+                        at="element",
+                        index=i,
+                        feed=rest[i] / t_int,
+                        limit=np.zeros(i.size, dtype=np.int64),
+                        labels=(REST_LABEL,),
+                        values={"rest_mm": rest[i]},
+                    )
+                )
         out.append(
             Indicator(
                 name=BLEND_INDICATOR,
                 at="junction",
                 index=index,
-                feed=2.0 * travel / machine.interpolation_time,
+                feed=arc / t_int,
                 limit=np.zeros(index.size, dtype=np.int64),
                 labels=(BLEND_LABEL,),
                 values={"hold_mm": hold, "travel_mm": travel},
@@ -288,6 +334,7 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     jlim = np.where(not_below, 0, jlim)
     jfeed = np.fmin(jfeed, jprog)
 
+    keep_all = machine.corner_blending == "linuxcnc"
     efeed = tp.feed.copy()
     eind = np.full(tp.n, -1, dtype=CODE)
     elim = np.full(tp.n, -1, dtype=CODE)
@@ -312,6 +359,8 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         min_length=np.where(
             tp.is_feed, min_block_length(tp.feed, machine.interpolation_time), np.nan
         ),
-        junction_hold=np.where(not_below, 0.0, jhold[0]),
-        junction_travel=np.where(not_below, 0.0, jhold[1]),
+        # A corner that does not bind is crossed at the programmed feed: nothing held there;
+        # but LinuxCNC's arcs change the acceleration along them wherever they are inserted.
+        junction_hold=jhold[0] if keep_all else np.where(not_below, 0.0, jhold[0]),
+        junction_travel=jhold[1] if keep_all else np.where(not_below, 0.0, jhold[1]),
     )

@@ -467,6 +467,13 @@ def boundary_caps(
     return b
 
 
+#: Share of the acceleration a planner uses along the arcs it inserts at corners, by the
+#: machine's ``corner_blending``: the paper's speed is constant over the arc (sec. 2.1);
+#: LinuxCNC 2.9 changes speed along its blend arcs at half the acceleration of their plane
+#: (blendmath.h BLEND_ACC_RATIO_TANGENTIAL).
+BLEND_ACCELERATION = {"paper": 0.0, "linuxcnc": 0.5}
+
+
 def _holds(ev: Evaluation) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """(n,) hold lengths at the start and end of every move (mm of programmed path), from the
     junctions' ``hold_mm``, at most half of each move; and the length actually run per mm of
@@ -728,6 +735,12 @@ def build_profile(
         acc, jerk = np.minimum(acc, acc_rot), np.minimum(jerk, jerk_rot)
         turning, lead = rotary.pauses(tp, m)
         pause = tp.dwell + turning
+    # The share of the lowest moved axis's acceleration a planner uses along the arcs it
+    # inserts at corners (where it changes speed at that rate, not at the move's), before
+    # the directions go.
+    along_blends = BLEND_ACCELERATION.get(m.corner_blending, 0.0)
+    if along_blends > 0.0:
+        a_blend = along_blends * np.where(tp.axis_share > 0, m.max_acceleration, np.inf).min(axis=1)
     if arc_factor != 1.0:
         acc = np.where(tp.is_arc, acc * arc_factor, acc)
     if end_factor != 1.0 and tp.n:
@@ -737,6 +750,17 @@ def build_profile(
     b = boundary_caps(ev, cap, pause)
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
+    if along_blends > 0.0:
+        # Along a blend arc whose speed limit is above the moves' (the arc does not bind),
+        # the speed changes at a_blend instead of the move's acceleration: the ramps get the
+        # same reach (a (L - holds) + a_blend holds) when the holds they skip shrink by
+        # 1 - a_blend / a. A binding arc is run at its speed, held as the paper has it.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            keep = np.clip(np.nan_to_num(1.0 - a_blend / acc, nan=0.0), 0.0, 1.0)
+        j = ev.junction
+        free = ~(ev.junction_feed < np.minimum(cap[j], cap[j + 1]) * (1.0 - TOL.rel_equal))
+        h_end[j[free]] *= keep[j[free]]
+        h_start[j[free] + 1] *= keep[j[free] + 1]
     holds = _Holds(length, h_start, h_end, r_start, r_end)
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
     a_up, a_dn = acc.copy(), acc.copy()

@@ -14,6 +14,8 @@ The TOML file speaks the paper's units (m/min, m/s^2, m/s^3, s, mm); the
     curvature_transition_time = 0.012  # s, dt (model 2)
     max_path_feed = 15.0               # m/min, all axes together (optional; default none)
     block_time_on_blends = true        # t_int caps the inserted corner arcs too (optional)
+    corner_blending = "linuxcnc"       # how corners are blended: "paper" (default) or
+                                       # LinuxCNC 2.9's planner (optional)
 
 Optional, for the readers (:mod:`core.model.setup`) and rotary axes::
 
@@ -75,8 +77,12 @@ CONTROLLER_KEYS = {
 #: Rotary axes' keys -> factor to deg/s, deg/s^2, deg/s^3 (max_jerk optional).
 ROTARY_KEYS = {"max_feed": 1.0 / 60.0, "max_acceleration": 1.0, "max_jerk": 1.0}
 #: Optional [controller] keys for the readers (see core.model.setup).
-#: Optional [controller] keys of the planner: max_path_feed (m/min), block_time_on_blends.
-PLANNER_KEYS = ("max_path_feed", "block_time_on_blends")
+#: Optional [controller] keys of the planner: max_path_feed (m/min), block_time_on_blends,
+#: corner_blending.
+PLANNER_KEYS = ("max_path_feed", "block_time_on_blends", "corner_blending")
+#: Corner blending models: the paper's (an arc of eq. 1 at each corner, crossed at constant
+#: speed) and LinuxCNC 2.9's planner's (plugins/tangential.py).
+CORNER_BLENDING = ("paper", "linuxcnc")
 SETUP_KEYS = (
     "default_path_mode",
     "home",
@@ -142,6 +148,11 @@ class Machine:
     #: segments it executes like any block (LinuxCNC's planner); False: programmed blocks
     #: only, as the paper's model 3.
     block_time_on_blends: bool = False
+    #: How the planner blends corners: "paper" (sec. 2.1: an arc of eq. 1 at every corner,
+    #: crossed at constant speed) or "linuxcnc" (LinuxCNC 2.9's planner: near-tangent
+    #: junctions run through without an arc, arcs sized by the speed they are run at, and
+    #: the speed changes along them at half the acceleration; see plugins/tangential.py).
+    corner_blending: str = "paper"
     #: The gap (mm/s RMS over time) a prediction of this machine leaves on data it was not
     #: fitted on: the noise floor of the diagnosis (``[diagnosis] noise_floor`` in mm/min,
     #: written by ``ncperf calibrate``); NaN: none given (estimated from each trace).
@@ -385,6 +396,16 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
                 line=_line_of(text, "block_time_on_blends", "controller"),
             )
         planner["block_time_on_blends"] = flag
+    if "corner_blending" in ctrl:
+        mode = ctrl["corner_blending"]
+        if mode not in CORNER_BLENDING:
+            raise MachineError(
+                f"'corner_blending' in [controller] must be one of "
+                f"{', '.join(repr(c) for c in CORNER_BLENDING)}, got {mode!r}",
+                source=source,
+                line=_line_of(text, "corner_blending", "controller"),
+            )
+        planner["corner_blending"] = mode
     c = {k: _number(ctrl[k], k, "controller", source, text) * f for k, f in CONTROLLER_KEYS.items()}
     noise_floor = math.nan
     diag = data.get("diagnosis", {})
@@ -401,6 +422,7 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         setup=setup,
         max_path_feed=planner.get("max_path_feed", math.inf),
         block_time_on_blends=planner.get("block_time_on_blends", False),
+        corner_blending=planner.get("corner_blending", "paper"),
         noise_floor=noise_floor,
         name=name.strip(),
         max_feed=np.array(per_axis["max_feed"]),

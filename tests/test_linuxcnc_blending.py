@@ -1,0 +1,166 @@
+"""LinuxCNC 2.9's corner blending (``corner_blending = "linuxcnc"``), against hand
+calculations from the rules its planner documents in its source (tp.c tpSetupTangent,
+blendmath.c blendComputeParameters, BLEND_ACC_RATIO_TANGENTIAL); the machine: every axis
+2000 mm/s^2, no jerk limit, block time 1.02 ms (a 1 ms servo period), tolerance 0.01 mm,
+normal acceleration factor 1 (a_n = 2000)."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+
+import pytest
+
+from core.engine.effects import Setup
+from tests.conftest import machine, path
+
+INF = float("inf")
+
+
+def lcnc(mode="linuxcnc"):
+    m = machine(acc=(2.0, 2.0, 2.0), jerk=(INF, INF, INF), t_int=0.00102)
+    return dataclasses.replace(m, corner_blending=mode, block_time_on_blends=True)
+
+
+def turn(deg, length=10.0, feed=100.0):
+    """Two lines of ``length`` mm, the second turned by ``deg`` in XY."""
+    b = math.radians(deg)
+    end = (length + length * math.cos(b), length * math.sin(b), 0.0)
+    return path([{"end": (length, 0.0, 0.0)}, {"end": end}], feed=feed)
+
+
+def tangential(nc, tp, m):
+    return next(i for i in nc.indicators(tp, m) if i.name == "tangential")
+
+
+def test_a_near_tangent_junction_has_no_arc(nc):
+    """At 100 mm/s the turn within one servo period needs (100 / 0.001 + 2000) sin(b) /
+    2000 = 51 sin(b) of an axis's acceleration: under the kink ratio 0.1 for b < 0.1123 deg.
+    At 0.1 deg: run as tangent, no limit and nothing held; at 0.2 deg: an arc."""
+    m = lcnc()
+    near = tangential(nc, turn(0.1), m)
+    assert near.feed[0] == INF
+    assert near.values["hold_mm"][0] == 0.0
+    arc = tangential(nc, turn(0.2), m)
+    assert arc.values["hold_mm"][0] > 0.0
+    # the paper's model puts an arc at both
+    assert tangential(nc, turn(0.1), lcnc("paper")).values["hold_mm"][0] > 0.0
+
+
+def test_an_arc_is_as_large_as_its_speed_needs(nc):
+    """90 degrees at F 5 mm/s: the tolerance allows d = sin45 0.01 / (1 - cos45) =
+    0.0241421 mm, R = d / tan45 = 0.0241421, sqrt(2000 R) = 6.949 mm/s > F, so v_plan = 5;
+    a parabolic blend at 1000 mm/s^2 reaching min(sqrt(2 1000 d), 5) = 5 takes 5 / 1000 s
+    over s = 0.025 mm: R_blend = s / (pi / 2) = 0.0159155, R_plan = max(5^2 / 2000, R_blend)
+    = 0.0159155: tangent length R tan45 = 0.0159155 mm, half the arc R pi / 4 = 0.0125 mm.
+    The paper's arc: eq. (1), R = 0.01 cos45 / (1 - cos45) = 0.0241421."""
+    ind = tangential(nc, turn(90.0, feed=5.0), lcnc())
+    assert ind.values["hold_mm"][0] == pytest.approx(0.0159155, rel=1e-5)
+    assert ind.values["travel_mm"][0] == pytest.approx(0.0125, rel=1e-5)
+    assert ind.feed[0] == pytest.approx(math.sqrt(2000 * 0.0241421), rel=1e-5)
+    paper = tangential(nc, turn(90.0, feed=5.0), lcnc("paper"))
+    assert paper.values["hold_mm"][0] == pytest.approx(0.0241421, rel=1e-5)
+
+
+def test_speed_changes_along_an_arc_that_does_not_bind(nc):
+    """Two 1 mm lines 1 degree apart at F 100, from rest to rest. The arc: d = min(0.5,
+    0.5, sin(0.5deg) 0.01 / (1 - cos(0.5deg)) = 2.29) = 0.5 mm, R = 0.5 / tan(0.5deg) =
+    57.29 mm, sqrt(2000 R) = 338 > F: it does not bind, and (kink 51 sin(1deg) = 0.89 > 0.1)
+    it is inserted whole (R_blend = min(3.16 / 0.01745, R) = R). LinuxCNC accelerates along
+    it at half of 2000: a ramp reaches 2000 x 0.5 + 1000 x 0.5 per side, as the profile's
+    line at 2000 over 1 - 0.5 x 0.5 = 0.75 mm: the top speed sqrt(2 2000 0.75) = 54.772 at
+    the junction, each line 2 x 0.75 / 54.772 + 0.25 / 54.772 = 0.031950 s. The paper's
+    model does not hold at a corner that does not bind: sqrt(2 2000 1) = 63.246, 2 x 2 x 1 /
+    63.246 = 0.063246 s. (The second line, 1 degree off X, may brake at 2000 / cos(1deg) =
+    2000.3: its stop takes 0.0316 % less time, hence rel=1e-4.)"""
+    tp = path(
+        [
+            {"end": (1.0, 0.0, 0.0)},
+            {"end": (1 + math.cos(math.radians(1)), math.sin(math.radians(1)), 0.0)},
+        ]
+    )
+    pr = nc.predict(tp, Setup(machine=lcnc(), ramps=True)).profile
+    assert pr.v_exit[0] == pytest.approx(math.sqrt(3000.0), rel=1e-3)
+    assert pr.cycle_time == pytest.approx(2 * (1.5 + 0.25) / math.sqrt(3000.0), rel=1e-3)
+    paper = nc.predict(tp, Setup(machine=lcnc("paper"), ramps=True)).profile
+    assert paper.v_exit[0] == pytest.approx(math.sqrt(4000.0), rel=1e-6)
+    assert paper.cycle_time == pytest.approx(4.0 / math.sqrt(4000.0), rel=1e-4)
+
+
+def test_a_binding_arc_is_run_at_its_speed(nc):
+    """A 90-degree corner of two 10 mm lines at F 100: the arc binds (6.949 mm/s, as above;
+    LinuxCNC caps its speed there), so it is held over its whole tangent length as the
+    paper has it, in both modes alike."""
+    tp = turn(90.0)
+    a = nc.predict(tp, Setup(machine=lcnc(), ramps=True)).profile
+    b = nc.predict(tp, Setup(machine=lcnc("paper"), ramps=True)).profile
+    assert a.v_exit[0] == pytest.approx(math.sqrt(2000 * 0.0241421), rel=1e-5)
+    assert a.hold_end[0] == pytest.approx(0.0241421, rel=1e-5)
+    assert b.hold_end[0] == pytest.approx(0.0241421, rel=1e-5)
+    assert a.cycle_time == pytest.approx(b.cycle_time, rel=1e-9)
+
+
+def test_machine_file_key(tmp_path):
+    from core import MachineError
+    from core.model.machine import load_machine_file
+
+    text = tmp_path / "m.toml"
+    base = """name = "m"
+[axes.X]
+max_feed = 15.0
+max_acceleration = 2.0
+max_jerk = inf
+[axes.Y]
+max_feed = 15.0
+max_acceleration = 2.0
+max_jerk = inf
+[axes.Z]
+max_feed = 15.0
+max_acceleration = 2.0
+max_jerk = inf
+[controller]
+interpolation_time = 0.00102
+path_tolerance = 0.01
+curvature_transition_time = 0.001
+"""
+    text.write_text(base + 'corner_blending = "linuxcnc"\n')
+    assert load_machine_file(str(text)).corner_blending == "linuxcnc"
+    text.write_text(base)
+    assert load_machine_file(str(text)).corner_blending == "paper"
+    text.write_text(base + 'corner_blending = "fanuc"\n')
+    with pytest.raises(MachineError, match="corner_blending.*'paper', 'linuxcnc'"):
+        load_machine_file(str(text))
+
+
+def test_what_is_left_between_two_arcs_is_a_segment(nc):
+    """A 0.1 mm line between two 90-degree corners at F 100: each arc binds (6.949 mm/s) and
+    takes its tolerance's tangent length 0.0241421 mm; the rest, 0.1 - 2 x 0.0241421 =
+    0.0517157 mm, would last 0.0517157 / 6.949 = 7.4 ms, over LinuxCNC's 4 servo periods:
+    a segment of its own, at most 0.0517157 / 0.00102 = 50.70 mm/s."""
+    tp = path([{"end": (10, 0, 0)}, {"end": (10, 0.1, 0)}, {"end": (20, 0.1, 0)}])
+    ev = nc.predict(tp, Setup(machine=lcnc())).evaluation
+    assert ev.element_feed[1] == pytest.approx((0.1 - 2 * 0.0241421) / 0.00102, rel=1e-5)
+    assert ev.labels[ev.element_limit[1]] == "block time (rest between blend arcs)"
+    # the paper's mode keeps model 3 on the programmed block: 0.1 / 0.00102 = 98 mm/s
+    paper = nc.predict(tp, Setup(machine=lcnc("paper"))).evaluation
+    assert paper.element_feed[1] == pytest.approx(0.1 / 0.00102)
+
+
+def test_a_short_rest_is_run_as_part_of_the_next_arc(nc):
+    """Lines of 10, 0.2 and 10 mm turning 30 degrees twice at F 100: the tolerance allows
+    d = sin15 0.01 / (1 - cos15) = 0.075957 mm (< 0.1, half the short line), R = d / tan15
+    = 0.283477 mm, sqrt(2000 R) = 23.811 mm/s. The rest 0.2 - 2 d = 0.048086 mm lasts
+    under 4 servo periods at 23.811 (0.095 mm): it joins the second arc, R pi/6 + 0.048086 =
+    0.196512 mm long (cap 192.7 mm/s, not binding), and has no cap of its own."""
+    b = math.radians(30)
+    p1 = (10 + 0.2 * math.cos(b), 0.2 * math.sin(b), 0.0)
+    p2 = (p1[0] + 10 * math.cos(2 * b), p1[1] + 10 * math.sin(2 * b), 0.0)
+    tp = path([{"end": (10, 0, 0)}, {"end": p1}, {"end": p2}])
+    m = lcnc()
+    blend = [
+        i for i in nc.indicators(tp, m) if i.name == "tangential"
+    ]  # the arcs as LinuxCNC sizes them
+    assert blend[0].values["hold_mm"] == pytest.approx([0.075957, 0.075957], rel=1e-4)
+    ev = nc.predict(tp, Setup(machine=m)).evaluation
+    assert ev.element_feed[1] == 100.0
+    assert ev.junction_feed == pytest.approx([23.811, 23.811], rel=1e-4)
