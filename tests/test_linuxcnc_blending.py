@@ -164,3 +164,9 @@ def test_a_short_rest_is_run_as_part_of_the_next_arc(nc):
     ev = nc.predict(tp, Setup(machine=m)).evaluation
     assert ev.element_feed[1] == 100.0
     assert ev.junction_feed == pytest.approx([23.811, 23.811], rel=1e-4)
+    # the profile runs the merged rest as the second arc's: the short line is all arc, at
+    # the corners' speed (both bind)
+    pr = nc.predict(tp, Setup(machine=m, ramps=True)).profile
+    assert pr.hold_start[1] == pytest.approx(0.075957, rel=1e-4)
+    assert pr.hold_end[1] == pytest.approx(0.2 - 0.075957, rel=1e-4)
+    assert pr.v_peak[1] == pytest.approx(23.811, rel=1e-4)

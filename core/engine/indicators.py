@@ -141,6 +141,9 @@ class Evaluation:
         What caps each block; -1 where nothing does.
     min_length : (n,) float, mm
         Eq. (16) L = F t_int for feed moves, NaN for rapids.
+    blend_rest : (n,) float, mm, or None
+        What is left of each move that the planner runs as part of the arc at its end
+        (LinuxCNC merges a short rest into the next blend arc); None: nothing is.
     """
 
     toolpath: ToolPath
@@ -158,6 +161,7 @@ class Evaluation:
     min_length: NDArray[np.float64]
     junction_hold: NDArray[np.float64]
     junction_travel: NDArray[np.float64]
+    blend_rest: NDArray[np.float64] | None = None
 
     @cached_property
     def junction_reduction(self) -> NDArray[np.float64]:
@@ -244,7 +248,8 @@ def _blend_block_time(
                 & ~tp.is_arc[index]
                 & (rest[index] < LCNC_GAP_BLOCKS * t_int * v_arc)
             )
-            arc = arc + np.where(merged, rest[index], 0.0)
+            merged_mm = np.where(merged, rest[index], 0.0)
+            arc = arc + merged_mm
             own = trimmed > 0
             own[index[merged]] = False
             # (a programmed arc is never run as part of a blend; only lines keep rests here)
@@ -270,7 +275,8 @@ def _blend_block_time(
                 feed=arc / t_int,
                 limit=np.zeros(index.size, dtype=np.int64),
                 labels=(BLEND_LABEL,),
-                values={"hold_mm": hold, "travel_mm": travel},
+                values={"hold_mm": hold, "travel_mm": travel}
+                | ({"merged_mm": merged_mm} if rests else {}),
             )
         )
     return out
@@ -335,6 +341,11 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     jfeed = np.fmin(jfeed, jprog)
 
     keep_all = machine.corner_blending == "linuxcnc"
+    blend_rest = None
+    for ind in indicators:
+        if ind.name == BLEND_INDICATOR and "merged_mm" in ind.values:
+            blend_rest = np.zeros(tp.n) if blend_rest is None else blend_rest
+            blend_rest[ind.index] = np.maximum(blend_rest[ind.index], ind.values["merged_mm"])
     efeed = tp.feed.copy()
     eind = np.full(tp.n, -1, dtype=CODE)
     elim = np.full(tp.n, -1, dtype=CODE)
@@ -363,4 +374,5 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         # but LinuxCNC's arcs change the acceleration along them wherever they are inserted.
         junction_hold=jhold[0] if keep_all else np.where(not_below, 0.0, jhold[0]),
         junction_travel=jhold[1] if keep_all else np.where(not_below, 0.0, jhold[1]),
+        blend_rest=blend_rest,
     )

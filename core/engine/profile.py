@@ -750,6 +750,12 @@ def build_profile(
     b = boundary_caps(ev, cap, pause)
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
+    if ev.blend_rest is not None:
+        # a rest run as part of the arc at the move's end is the arc's, straight (ratio 1)
+        k = np.flatnonzero(ev.blend_rest > 0)
+        rest = ev.blend_rest[k]
+        r_end[k] = (r_end[k] * h_end[k] + rest) / (h_end[k] + rest)
+        h_end[k] += rest
     if along_blends > 0.0:
         # Along a blend arc whose speed limit is above the moves' (the arc does not bind),
         # the speed changes at a_blend instead of the move's acceleration: the ramps get the
