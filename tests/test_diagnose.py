@@ -93,6 +93,33 @@ def test_alignment_keeps_a_plunge_apart_from_the_retract_it_retraces(nc, with_li
     assert np.all(al.s[plunge] > 10.0)
 
 
+def test_alignment_follows_a_drilling_cycle_down_and_back_up_its_own_line(nc):
+    """A canned drilling cycle runs one block as several moves: rapid over the hole and down
+    to R, feed 4 mm down, rapid back up the same points -- all of one program line, so the
+    line cannot tell the feed's samples from the retract's. The retract's samples belong
+    after the feed move (s in [16, 24] here), not back on it (they were folded onto it, and the
+    retract's 100+ mm/s read as the feed's: a 2.5D part's drilling showed a 1000 mm/min gap
+    that was not there)."""
+    tp = path(
+        [
+            {"start": (0, 0, 5), "end": (8, 0, 5), "rapid": True},
+            {"end": (8, 0, 1), "rapid": True},
+            {"end": (8, 0, -3)},
+            {"end": (8, 0, 5), "rapid": True},
+            {"end": (16, 0, 5), "rapid": True},
+        ]
+    )
+    tp = dataclasses.replace(tp, line=np.full(tp.n, 7))
+    m = machine(jerk=(INF, INF, INF))
+    tr = synthetic_trace(nc, tp, Setup(machine=m))
+    al = align(tp, tr)
+    _, s_true, _ = nc.predict(tp, Setup(machine=m)).signal()
+    assert al.ok
+    assert np.max(np.abs(al.s - s_true)) < 0.06  # within the path sampling step
+    back_up = (s_true > 16.5) & (s_true < 23.5)
+    assert back_up.any() and np.all(al.s[back_up] > 16.0)
+
+
 def test_a_trace_in_other_units_is_refused(nc, tmp_path):
     """The same motion recorded in inches, read as mm: low alignment quality, no diagnosis;
     read with --trace-units inch, it aligns, at the arc lengths of the mm trace."""

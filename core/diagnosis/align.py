@@ -155,13 +155,19 @@ def _project(
             win = np.flatnonzero(
                 ((owner >= a - 1) & (owner <= b + 1)) | ((s_p >= s_a - LAG_BACK) & (owner <= b))
             )
+            # Where the samples should be if they run on along the line's moves from its
+            # start: tells apart two passes of one line over the same points (a drilling
+            # cycle's feed down and rapid back up its own hole).
+            travel = np.linalg.norm(np.diff(q[sel], axis=0), axis=1)
+            s_exp = s_a + np.concatenate([[0.0], np.cumsum(travel)])
             for c in range(0, sel.size, 2048):
                 part = sel[c : c + 2048]
-                k, dd = _nearest(q[part], pts[own])
+                e = s_exp[c : c + 2048]
+                k, dd = _nearest(q[part], pts[own], s_p[own], e)
                 s[part] = s_p[own[k]]
                 dist[part] = dd
                 if win.size > own.size:
-                    k2, d2 = _nearest(q[part], pts[win])
+                    k2, d2 = _nearest(q[part], pts[win], s_p[win], e)
                     nearer = d2 < dd - TOL.pass_tie
                     s[part[nearer]] = s_p[win[k2[nearer]]]
                     dist[part[nearer]] = d2[nearer]
