@@ -494,22 +494,31 @@ def _passes(b: NDArray, inner: NDArray, a_up: NDArray, a_dn: NDArray) -> NDArray
     The machine changes speed only between the holds at the ends of each move (the inserted
     arc of a corner, a curvature transition): the passes use the length left between them,
     ``inner`` = max(length - holds, 0). At a boundary whose cap does not bind, the hold then
-    runs at the boundary's speed, which is slightly conservative. (Written with ``out=``:
-    the same operations in the same order, without a temporary per step.)
+    runs at the boundary's speed, which is slightly conservative.
     """
-    n1 = b.size
-    b2 = b * b
+    return _passes_of(b * b, _pass_terms(a_up, inner), _pass_terms(a_dn, inner))
+
+
+def _pass_terms(a: NDArray, inner: NDArray) -> NDArray:
+    """(n,) 2 a L of every move: the steps of the acceleration-weighted length W."""
+    tmp = np.multiply(a, inner)
+    tmp *= 2.0
+    return tmp
+
+
+def _passes_of(b2: NDArray, up: NDArray, dn: NDArray) -> NDArray:
+    """:func:`_passes` from the squared caps ``b2`` and the :func:`_pass_terms` of both
+    directions (the rounds of :func:`build_profile` keep the terms and renew only those of
+    the moves whose acceleration changed). (Written with ``out=``: the same operations in
+    the same order, without a temporary per step.)"""
+    n1 = b2.size
     w = np.empty(n1)
     w[0] = 0.0
-    tmp = np.multiply(a_up, inner)
-    tmp *= 2.0
-    np.cumsum(tmp, out=w[1:])
+    np.cumsum(up, out=w[1:])
     fwd = np.subtract(b2, w)
     np.minimum.accumulate(fwd, out=fwd)
     fwd += w
-    np.multiply(a_dn, inner, out=tmp)
-    tmp *= 2.0
-    np.cumsum(tmp, out=w[1:])
+    np.cumsum(dn, out=w[1:])
     bwd = np.add(b2, w)
     rev = bwd[::-1]
     np.minimum.accumulate(rev, out=rev)
@@ -671,22 +680,157 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, N
     return phase, dv, low
 
 
-def _ramp_acceleration(phase: NDArray, dv: NDArray, acc: NDArray, jerk: NDArray) -> NDArray:
-    """``acc`` with the effective acceleration of its ramp on every move in a ramp phase
-    (computed on those moves only: on long programs most moves cruise)."""
-    out = acc.copy()
-    idx = np.flatnonzero(phase)
-    out[idx] = effective_acceleration(dv[idx], acc[idx], jerk[idx])
-    return out
+class _Rounds:
+    """The rounds of the jerk iteration of :func:`build_profile`, without the (n,) work a
+    round's result does not need.
 
+    A round needs, of the speeds, only where each move accelerates or brakes (its peak
+    against its entry and exit speed) and, on the moves that do one of them only, whether
+    they cruise; the times, and the cruise lengths elsewhere, are for the last round alone
+    (:func:`_moves`). The accelerations change on the moves in a ramp (a fifth of a
+    finishing raster's) and where they had changed before, so the new accelerations, the
+    damping and the terms the passes sum are computed there only, and ``a_up``, ``a_dn``
+    (updated in place) keep the rest. Every value is the same arithmetic on the same
+    numbers as :func:`_moves` and :func:`_ramp_changes` over all the moves (and as the
+    effective accelerations and their damping over all of them were): the profile is bit
+    for bit the same.
+    """
 
-def _damped(a: NDArray, new: NDArray, last: NDArray) -> tuple[NDArray, NDArray]:
-    """The next accelerations of the jerk iteration, and the sign of each step (-1, 0, 1):
-    the geometric mean of ``a`` and ``new`` where the step reverses the last one."""
-    step = np.sign(new - a)
-    back = step * last < 0
-    out = np.where(back, np.sqrt(a * new), new)
-    return out, np.sign(out - a).astype(np.int8)  # -1, 0, 1: one byte a move
+    def __init__(self, caps, cap, acc, jerk, holds: _Holds) -> None:
+        self.b2 = caps * caps
+        self.cap, self.acc, self.jerk, self.holds = cap, acc, jerk, holds
+        self.a_up, self.a_dn = acc.copy(), acc.copy()
+        self.term_up = _pass_terms(self.a_up, holds.inner)
+        self.term_dn = self.term_up.copy()
+        self.length2 = 2.0 * holds.between
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.den = 1.0 / self.a_up
+            self.den += 1.0 / self.a_dn
+        n = acc.size
+        self.step_up = np.zeros(n, dtype=np.int8)
+        self.step_dn = np.zeros(n, dtype=np.int8)
+
+    def passes(self) -> NDArray:
+        """:func:`_passes` at the current accelerations."""
+        return _passes_of(self.b2, self.term_up, self.term_dn)
+
+    def step(self, v: NDArray) -> float:
+        """One round from the boundary speeds ``v``: the accelerations of the next (in
+        place); returns the largest relative change, as :func:`build_profile` measures it."""
+        a_up, a_dn = self.a_up, self.a_dn
+        v0, v1 = v[:-1], v[1:]
+        vsq = v * v
+        v0sq, v1sq = vsq[:-1], vsq[1:]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            # the peak of _moves: (2 L + v0^2 / a_up + v1^2 / a_dn) / (1 / a_up + 1 / a_dn)
+            peak = np.divide(v0sq, a_up)
+            peak += self.length2
+            tmp = np.divide(v1sq, a_dn)
+            peak += tmp
+            peak /= self.den
+        np.maximum(peak, 0.0, out=peak)
+        np.sqrt(peak, out=peak)
+        np.minimum(self.cap, peak, out=peak)
+        np.maximum(v0, v1, out=tmp)
+        np.maximum(peak, tmp, out=peak)
+        # _ramp_changes: which moves accelerate (peak above v0), which brake (above v1)
+        tol = np.maximum(peak, 1.0, out=tmp)
+        tol *= TOL.rel_equal
+        lim = np.add(v0, tol)
+        rise = peak > lim
+        np.add(v1, tol, out=lim)
+        fall = peak > lim
+        del tol, tmp, lim
+        # the cruise length of the moves that only accelerate or only brake (_moves' d_cr)
+        x = np.flatnonzero(rise != fall)
+        pk = peak[x]
+        pk2 = pk * pk
+        up = pk2 - v0sq[x]
+        up /= 2 * a_up[x]
+        d_cr = self.holds.between[x] - up
+        up = pk2 - v1sq[x]
+        up /= 2 * a_dn[x]
+        d_cr -= up
+        np.maximum(d_cr, 0.0, out=d_cr)
+        flat = d_cr <= TOL.nil_distance
+        n = peak.size
+        # through[k + 1]: move k accelerates to its very end (rising) or brakes from its very
+        # start (falling) and so links its ramp to the next or the previous move
+        through = np.zeros(n + 1, dtype=bool)
+        through[x + 1] = rise[x] & flat
+        change_up = self._direction(True, rise, through, v0, v1, peak)
+        through[x + 1] = fall[x] & flat
+        change_dn = self._direction(False, fall, through, v0, v1, peak)
+        return max(change_up, change_dn)
+
+    def _direction(self, rising, phase, through, v0, v1, peak) -> float:
+        """The next accelerations of one direction (updated in place, with the passes' terms
+        and the peak's denominator); returns the largest relative change.
+
+        :func:`_ramp_changes` on the moves in a ramp phase gives each the speed change of
+        its ramp, hence its effective acceleration (``acc`` elsewhere); where a move's
+        A_eff turns back against its last step, the geometric mean of the old and the new
+        (the damping). Both only where a ramp phase is or the acceleration is not
+        ``acc``: elsewhere the new one is the old one."""
+        if rising:
+            a, last, term = self.a_up, self.step_up, self.term_up
+        else:
+            a, last, term = self.a_dn, self.step_dn, self.term_dn
+        acc = self.acc
+        idx = np.flatnonzero(phase)
+        if idx.size:
+            # chains of moves accelerating (braking) end to end: a move continues the chain
+            # of the one before when that one accelerates through its end (rising), or when
+            # it brakes from its own start and the one before brakes too (falling)
+            if rising:
+                cont = through[idx]
+            else:
+                cont = through[idx + 1]
+                cont[0] = False
+                cont[1:] &= np.diff(idx) == 1
+            start = ~cont
+            c = np.cumsum(start) - 1
+            first = idx[start]
+            last_of = np.empty(idx.size, dtype=bool)
+            last_of[:-1] = start[1:]
+            last_of[-1] = True
+            end = idx[last_of]
+            if rising:
+                lo = v0[first]
+                hi = np.where(through[end + 1], v1[end], peak[end])
+            else:
+                hi = np.where(through[first + 1], v0[first], peak[first])
+                lo = v1[end]
+            eff = effective_acceleration((hi - lo)[c], acc[idx], self.jerk[idx])
+        else:
+            eff = np.zeros(0)
+        # the new acceleration differs from the current one only in a ramp phase or where
+        # the current one is not the machine's (elsewhere both are ``acc``: no step)
+        moved = a != acc
+        moved |= phase
+        cand = np.flatnonzero(moved)
+        del moved
+        new = acc[cand]
+        new[phase[cand]] = eff
+        old = a[cand]
+        sign = np.sign(new - old)
+        back = sign * last[cand] < 0
+        out = np.where(back, np.sqrt(old * new), new)
+        step = np.zeros(a.size, dtype=np.int8)
+        step[cand] = np.sign(out - old).astype(np.int8)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            change = float(np.nanmax(np.abs(out / old - 1.0), initial=0.0))
+        a[cand] = out
+        term[cand] = _pass_terms(out, self.holds.inner[cand])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            den = 1.0 / self.a_up[cand]
+            den += 1.0 / self.a_dn[cand]
+        self.den[cand] = den
+        if rising:
+            self.step_up = step
+        else:
+            self.step_dn = step
+        return change
 
 
 def build_profile(
@@ -739,39 +883,30 @@ def build_profile(
     h_start, h_end, r_start, r_end = _holds(ev)
     holds = _Holds(length, h_start, h_end, r_start, r_end)
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
-    a_up, a_dn = acc.copy(), acc.copy()
-    step_up = np.zeros(tp.n, dtype=np.int8)
-    step_dn = np.zeros(tp.n, dtype=np.int8)
+    jerk_limited = bool(np.isfinite(jerk).any())
+    # The rounds change the accelerations only (see _Rounds); the last one (the rounds' end,
+    # or the first whose change is below JERK_CONVERGED) makes the speeds and times.
+    rnd = _Rounds(caps, cap, acc, jerk, holds)
+    a_up, a_dn = rnd.a_up, rnd.a_dn
+    last_round = max(rounds, 1) - 1
     for r in range(max(rounds, 1)):
-        v = _passes(caps, holds.inner, a_up, a_dn)
-        v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
-        if r == rounds - 1 or not np.isfinite(jerk).any():
-            break
-        up, dv_up, _ = _ramp_changes(v0, peak, v1, d_cr, rising=True)
-        dn, dv_dn, _ = _ramp_changes(v0, peak, v1, d_cr, rising=False)
-        # This round's speeds are spent: free them before the next round makes its own
-        # (1M moves: 40 MB off the profile's peak).
-        del v, v0, peak, v1, time, d_cr
-        new_up = _ramp_acceleration(up, dv_up, acc, jerk)
-        new_dn = _ramp_acceleration(dn, dv_dn, acc, jerk)
-        del up, dv_up, dn, dv_dn
-        # Where a move's A_eff turns back (a staircase of falling caps: small steps give a low
-        # A_eff, which holds the speed under the caps, which gives one long ramp and a high
-        # A_eff, ...), take the geometric mean of the last two: the rounds then close in on
-        # the answer between the two states instead of alternating.
-        new_up, step_up = _damped(a_up, new_up, step_up)
-        new_dn, step_dn = _damped(a_dn, new_dn, step_dn)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            change = max(
-                float(np.nanmax(np.abs(new_up / a_up - 1.0), initial=0.0)),
-                float(np.nanmax(np.abs(new_dn / a_dn - 1.0), initial=0.0)),
-            )
-        a_up, a_dn = new_up, new_dn
-        if change < JERK_CONVERGED:
-            v = _passes(caps, holds.inner, a_up, a_dn)
+        v = rnd.passes()
+        if r == rounds - 1 or not jerk_limited:
             v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
             break
-    if np.isfinite(jerk).any():
+        if r == last_round:  # rounds < 1: the speeds before the accelerations' update
+            v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
+        # Where a move's A_eff turns back (a staircase of falling caps: small steps give a low
+        # A_eff, which holds the speed under the caps, which gives one long ramp and a high
+        # A_eff, ...), _Rounds takes the geometric mean of the last two: the rounds then close
+        # in on the answer between the two states instead of alternating.
+        change = rnd.step(v)
+        del v
+        if change < JERK_CONVERGED:
+            v = rnd.passes()
+            v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
+            break
+    if jerk_limited:
         _, dv_up, lo_up = _ramp_changes(v0, peak, v1, d_cr, rising=True)
         _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, d_cr, rising=False)
         ramps = (lo_up, dv_up, lo_dn, dv_dn, acc, jerk)
