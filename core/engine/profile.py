@@ -156,9 +156,16 @@ def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[ND
     share = tp.axis_share
     acc = np.asarray(acc, dtype=np.float64)
     jerk = np.asarray(jerk, dtype=np.float64)
+    # axis by axis (the minimum is exact, so the same values as over the (n, 3) array at
+    # once, without its temporaries and its slow row-wise minimum)
+    a = np.full(share.shape[0], np.inf)
+    j = np.full(share.shape[0], np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
-        a = np.where(share > 0, acc[None, :] / share, np.inf).min(axis=1)
-        j = np.where(share > 0, jerk[None, :] / share, np.inf).min(axis=1)
+        for k in range(share.shape[1]):
+            col = share[:, k]
+            moves = col > 0
+            np.minimum(a, np.where(moves, acc[k] / col, np.inf), out=a)
+            np.minimum(j, np.where(moves, jerk[k] / col, np.inf), out=j)
     # A move with no direction (zero length, NaN) gets the lowest axis limits.
     a = np.where(np.isfinite(a), a, acc.min())
     j = np.where(np.isnan(j) | (np.isinf(j) & np.isfinite(jerk).all()), jerk.min(), j)
