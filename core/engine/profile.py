@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import Evaluation
+from core.model.pieces import pieces
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
 
@@ -63,6 +64,8 @@ from core.model.toolpath import PathMode, ToolPath
 #: speed changes, hence a lower A_eff), contracting by about 4 in log per round.
 JERK_ROUNDS = 12
 JERK_CONVERGED = 1e-4
+#: Moves per piece of a round's elementwise work: its temporaries stay in the cache.
+CACHE_PIECE = 1 << 14
 
 
 def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
@@ -716,6 +719,9 @@ class _Rounds:
         n = acc.size
         self.step_up = np.zeros(n, dtype=np.int8)
         self.step_dn = np.zeros(n, dtype=np.int8)
+        # last round's ramps (moves, speed changes, effective accelerations) per direction
+        self.last_up: tuple[NDArray, NDArray, NDArray] | None = None
+        self.last_dn: tuple[NDArray, NDArray, NDArray] | None = None
 
     def passes(self) -> NDArray:
         """:func:`_passes` at the current accelerations."""
@@ -725,37 +731,49 @@ class _Rounds:
         """One round from the boundary speeds ``v``: the accelerations of the next (in
         place); returns the largest relative change, as :func:`build_profile` measures it."""
         a_up, a_dn = self.a_up, self.a_dn
-        v0, v1 = v[:-1], v[1:]
-        vsq = v * v
-        v0sq, v1sq = vsq[:-1], vsq[1:]
+        n = a_up.size
+        peak = np.empty(n)
+        rise = np.empty(n, dtype=bool)
+        fall = np.empty(n, dtype=bool)
+        size = min(n, CACHE_PIECE)
+        sq, tmp, lim = np.empty(size + 1), np.empty(size), np.empty(size)
+        # In pieces (elementwise: the same values), their temporaries in the cache.
         with np.errstate(divide="ignore", invalid="ignore"):
-            # the peak of _moves: (2 L + v0^2 / a_up + v1^2 / a_dn) / (1 / a_up + 1 / a_dn)
-            peak = np.divide(v0sq, a_up)
-            peak += self.length2
-            tmp = np.divide(v1sq, a_dn)
-            peak += tmp
-            peak /= self.den
-        np.maximum(peak, 0.0, out=peak)
-        np.sqrt(peak, out=peak)
-        np.minimum(self.cap, peak, out=peak)
-        np.maximum(v0, v1, out=tmp)
-        np.maximum(peak, tmp, out=peak)
-        # _ramp_changes: which moves accelerate (peak above v0), which brake (above v1)
-        tol = np.maximum(peak, 1.0, out=tmp)
-        tol *= TOL.rel_equal
-        lim = np.add(v0, tol)
-        rise = peak > lim
-        np.add(v1, tol, out=lim)
-        fall = peak > lim
-        del tol, tmp, lim
+            for s in pieces(n, CACHE_PIECE):
+                m = s.stop - s.start
+                vv, q, t, li, pk = v[s.start : s.stop + 1], sq[: m + 1], tmp[:m], lim[:m], peak[s]
+                v0, v1 = vv[:-1], vv[1:]
+                # the peak of _moves: (2 L + v0^2 / a_up + v1^2 / a_dn) / (1/a_up + 1/a_dn)
+                np.multiply(vv, vv, out=q)
+                np.divide(q[:-1], a_up[s], out=pk)
+                pk += self.length2[s]
+                np.divide(q[1:], a_dn[s], out=t)
+                pk += t
+                pk /= self.den[s]
+                np.maximum(pk, 0.0, out=pk)
+                np.sqrt(pk, out=pk)
+                np.minimum(self.cap[s], pk, out=pk)
+                np.maximum(v0, v1, out=t)
+                np.maximum(pk, t, out=pk)
+                # _ramp_changes: which moves accelerate (peak above v0), which brake (v1)
+                np.maximum(pk, 1.0, out=t)
+                t *= TOL.rel_equal
+                np.add(v0, t, out=li)
+                np.greater(pk, li, out=rise[s])
+                np.add(v1, t, out=li)
+                np.greater(pk, li, out=fall[s])
+        del sq, tmp, lim
+        v0, v1 = v[:-1], v[1:]
         # the cruise length of the moves that only accelerate or only brake (_moves' d_cr)
         x = np.flatnonzero(rise != fall)
         pk = peak[x]
         pk2 = pk * pk
-        up = pk2 - v0sq[x]
+        vx = v0[x]
+        up = pk2 - vx * vx
         up /= 2 * a_up[x]
         d_cr = self.holds.between[x] - up
-        up = pk2 - v1sq[x]
+        vx = v1[x]
+        up = pk2 - vx * vx
         up /= 2 * a_dn[x]
         d_cr -= up
         np.maximum(d_cr, 0.0, out=d_cr)
@@ -769,6 +787,25 @@ class _Rounds:
         through[x + 1] = fall[x] & flat
         change_dn = self._direction(False, fall, through, v0, v1, peak)
         return max(change_up, change_dn)
+
+    def _effective(self, rising: bool, idx: NDArray, dv: NDArray) -> NDArray:
+        """:func:`effective_acceleration` of the moves ``idx`` in ramps of speed change
+        ``dv``, recomputed only where ``dv`` is not last round's (from one round to the next,
+        most ramps are the same)."""
+        last = self.last_up if rising else self.last_dn
+        if last is not None and np.array_equal(last[0], idx):
+            eff = last[2].copy()
+            new = np.flatnonzero(dv != last[1])
+            if new.size:
+                k = idx[new]
+                eff[new] = effective_acceleration(dv[new], self.acc[k], self.jerk[k])
+        else:
+            eff = effective_acceleration(dv, self.acc[idx], self.jerk[idx])
+        if rising:
+            self.last_up = (idx, dv, eff)
+        else:
+            self.last_dn = (idx, dv, eff)
+        return eff
 
     def _direction(self, rising, phase, through, v0, v1, peak) -> float:
         """The next accelerations of one direction (updated in place, with the passes' terms
@@ -808,7 +845,7 @@ class _Rounds:
             else:
                 hi = np.where(through[first + 1], v0[first], peak[first])
                 lo = v1[end]
-            eff = effective_acceleration((hi - lo)[c], acc[idx], self.jerk[idx])
+            eff = self._effective(rising, idx, (hi - lo)[c])
         else:
             eff = np.zeros(0)
         # the new acceleration differs from the current one only in a ramp phase or where
@@ -827,6 +864,10 @@ class _Rounds:
         step[cand] = np.sign(out - old).astype(np.int8)
         with np.errstate(divide="ignore", invalid="ignore"):
             change = float(np.nanmax(np.abs(out / old - 1.0), initial=0.0))
+        # the terms and the denominator follow where the acceleration changed (in the later
+        # rounds a few moves in a thousand)
+        moved = out != old
+        cand, out = cand[moved], out[moved]
         a[cand] = out
         term[cand] = _pass_terms(out, self.holds.inner[cand])
         with np.errstate(divide="ignore", invalid="ignore"):
