@@ -603,10 +603,22 @@ class _Holds:
 def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds):
     """Entry, peak, exit speed and time of every move from its boundary speeds; the holds
     at its ends run at the entry and exit speed (over ``r * h`` of actual travel).
-    (Written with ``out=``: the same operations in the same order, fewer temporaries.)"""
+    (Elementwise, in pieces of :data:`CACHE_PIECE` moves, their temporaries in the cache:
+    the same values as over all the moves at once.)"""
     v0, v1 = v[:-1], v[1:]
-    t_hold = holds.time(v0, v1)
-    length = holds.between
+    t = holds.time(v0, v1)  # the holds' time, then the whole time
+    n = v0.size
+    peak, d_cr = np.empty(n), np.empty(n)
+    for s in pieces(n, CACHE_PIECE):
+        peak[s], d_cr[s], t[s] = _move_piece(
+            v[s.start : s.stop + 1], cap[s], a_up[s], a_dn[s], holds.between[s], t[s]
+        )
+    return v0, peak, v1, t, d_cr
+
+
+def _move_piece(v, cap, a_up, a_dn, length, t_hold):
+    """:func:`_moves` of consecutive moves: peak speed, cruise length, time."""
+    v0, v1 = v[:-1], v[1:]
     v0sq = v0 * v0  # v**2 of a float64 array is v * v
     v1sq = v1 * v1
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -617,7 +629,6 @@ def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds
         den = 1.0 / a_up
         den += 1.0 / a_dn
         peak /= den
-        del den  # (each temporary goes once spent: 1M moves, the profile's peak)
     np.maximum(peak, 0.0, out=peak)
     np.sqrt(peak, out=peak)
     np.minimum(cap, peak, out=peak)
@@ -629,22 +640,18 @@ def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds
     pk2 = peak * peak
     # d_cr = max(L - (peak^2 - v0^2) / (2 a_up) - (peak^2 - v1^2) / (2 a_dn), 0)
     up = pk2 - v0sq
-    del v0sq
     up /= 2 * a_up
     d_cr = length - up
     np.subtract(pk2, v1sq, out=up)
-    del pk2, v1sq
     up /= 2 * a_dn
     d_cr -= up
-    del up
     np.maximum(d_cr, 0.0, out=d_cr)
     with np.errstate(divide="ignore", invalid="ignore"):
         t_cr = np.where(peak > 0, d_cr / peak, 0.0)
     t += t_cr
-    del t_cr
     t += t_dn
     t += t_hold
-    return v0, peak, v1, t, d_cr
+    return peak, d_cr, t
 
 
 def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, NDArray]:
