@@ -719,7 +719,6 @@ class _Rounds:
         self.a_up, self.a_dn = acc.copy(), acc.copy()
         self.term_up = _pass_terms(self.a_up, holds.inner)
         self.term_dn = self.term_up.copy()
-        self.length2 = 2.0 * holds.between
         with np.errstate(divide="ignore", invalid="ignore"):
             self.den = 1.0 / self.a_up
             self.den += 1.0 / self.a_dn
@@ -753,7 +752,8 @@ class _Rounds:
                 # the peak of _moves: (2 L + v0^2 / a_up + v1^2 / a_dn) / (1/a_up + 1/a_dn)
                 np.multiply(vv, vv, out=q)
                 np.divide(q[:-1], a_up[s], out=pk)
-                pk += self.length2[s]
+                np.multiply(self.holds.between[s], 2.0, out=li)
+                pk += li
                 np.divide(q[1:], a_dn[s], out=t)
                 pk += t
                 pk /= self.den[s]
@@ -944,13 +944,13 @@ def build_profile(
     rnd = _Rounds(caps, cap, acc, jerk, holds)
     a_up, a_dn = rnd.a_up, rnd.a_dn
     last_round = max(rounds, 1) - 1
+    speeds = None
     for r in range(max(rounds, 1)):
         v = rnd.passes()
         if r == rounds - 1 or not jerk_limited:
-            v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
             break
         if r == last_round:  # rounds < 1: the speeds before the accelerations' update
-            v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
+            speeds = _moves(v, cap, a_up, a_dn, holds)
         # Where a move's A_eff turns back (a staircase of falling caps: small steps give a low
         # A_eff, which holds the speed under the caps, which gives one long ramp and a high
         # A_eff, ...), _Rounds takes the geometric mean of the last two: the rounds then close
@@ -958,9 +958,14 @@ def build_profile(
         change = rnd.step(v)
         del v
         if change < JERK_CONVERGED:
+            speeds = None
             v = rnd.passes()
-            v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
             break
+    del rnd  # the rounds' caches go before the speeds and times are made (1M moves: 50 MB)
+    if speeds is None:
+        speeds = _moves(v, cap, a_up, a_dn, holds)
+        del v
+    v0, peak, v1, time, d_cr = speeds
     if jerk_limited:
         _, dv_up, lo_up = _ramp_changes(v0, peak, v1, d_cr, rising=True)
         _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, d_cr, rising=False)
