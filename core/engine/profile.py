@@ -725,6 +725,9 @@ class _Rounds:
         n = acc.size
         self.step_up = np.zeros(n, dtype=np.int8)
         self.step_dn = np.zeros(n, dtype=np.int8)
+        # where the acceleration is not the machine's
+        self.off_up = self.a_up != acc
+        self.off_dn = self.off_up.copy()
         # last round's ramps (moves, speed changes, effective accelerations) per direction
         self.last_up: tuple[NDArray, NDArray, NDArray] | None = None
         self.last_dn: tuple[NDArray, NDArray, NDArray] | None = None
@@ -855,15 +858,18 @@ class _Rounds:
             eff = self._effective(rising, idx, (hi - lo)[c])
         else:
             eff = np.zeros(0)
-        # the new acceleration differs from the current one only in a ramp phase or where
-        # the current one is not the machine's (elsewhere both are ``acc``: no step)
-        moved = a != acc
-        moved |= phase
-        cand = np.flatnonzero(moved)
-        del moved
-        new = acc[cand]
-        new[phase[cand]] = eff
-        old = a[cand]
+        # The step (and the damping) is nil wherever the new acceleration is the current
+        # one: in a ramp phase where A_eff is the current acceleration, outside wherever the
+        # current one is the machine's (``off`` marks where it is not). So both only where
+        # they differ: in the later rounds a few moves in a thousand.
+        off = self.off_up if rising else self.off_dn
+        old_in = a[idx]
+        differ = eff != old_in
+        rest = np.flatnonzero(off & ~phase)
+        cand = np.concatenate([idx[differ], rest])
+        new = np.concatenate([eff[differ], acc[rest]])
+        old = np.concatenate([old_in[differ], a[rest]])
+        del old_in, differ, rest
         sign = np.sign(new - old)
         back = sign * last[cand] < 0
         out = np.where(back, np.sqrt(old * new), new)
@@ -871,11 +877,11 @@ class _Rounds:
         step[cand] = np.sign(out - old).astype(np.int8)
         with np.errstate(divide="ignore", invalid="ignore"):
             change = float(np.nanmax(np.abs(out / old - 1.0), initial=0.0))
-        # the terms and the denominator follow where the acceleration changed (in the later
-        # rounds a few moves in a thousand)
+        # the terms and the denominator follow where the acceleration changed
         moved = out != old
         cand, out = cand[moved], out[moved]
         a[cand] = out
+        off[cand] = out != acc[cand]
         term[cand] = _pass_terms(out, self.holds.inner[cand])
         with np.errstate(divide="ignore", invalid="ignore"):
             den = 1.0 / self.a_up[cand]
