@@ -654,33 +654,38 @@ def _move_piece(v, cap, a_up, a_dn, length, t_hold):
     return peak, d_cr, t
 
 
-def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, NDArray]:
+def _ramp_marks(v0, peak, v1, d_cr) -> tuple[NDArray, NDArray, NDArray]:
+    """Which moves accelerate (peak above the entry speed), which brake (above the exit
+    speed), and which cruise over no length, for :func:`_ramp_changes`."""
+    tol = TOL.rel_equal * np.maximum(peak, 1.0)
+    rise = peak > v0 + tol
+    fall = peak > v1 + tol
+    return rise, fall, d_cr <= TOL.nil_distance
+
+
+def _ramp_changes(v0, peak, v1, marks, rising: bool) -> tuple[NDArray, NDArray, NDArray]:
     """For each move, whether it has an acceleration (or braking) phase, the whole speed
     change of the ramp that phase belongs to (chains of moves accelerating end to end), and
-    the ramp's lower speed (where an acceleration starts, where a braking ends)."""
+    the ramp's lower speed (where an acceleration starts, where a braking ends); ``marks``
+    from :func:`_ramp_marks`."""
     n = v0.size
-    tol = TOL.rel_equal * np.maximum(peak, 1.0)
+    rise, fall, flat = marks
     if rising:
-        phase = peak > v0 + tol
-        through = (
-            phase & ~(peak > v1 + tol) & (d_cr <= TOL.nil_distance)
-        )  # accelerating to its very end
+        phase = rise
+        through = phase & ~fall & flat  # accelerating to its very end
         cont = np.zeros(n, dtype=bool)
         cont[1:] = through[:-1] & phase[1:]
     else:
-        phase = peak > v1 + tol
-        through = (
-            phase & ~(peak > v0 + tol) & (d_cr <= TOL.nil_distance)
-        )  # braking from its very start
+        phase = fall
+        through = phase & ~rise & flat  # braking from its very start
         cont = np.zeros(n, dtype=bool)
         cont[1:] = through[1:] & phase[:-1]
         # a braking chain runs forward from its first move; "cont[k]" links k-1 -> k
-    start = phase & ~cont
-    cid = np.cumsum(start) - 1
     idx = np.flatnonzero(phase)
     if idx.size == 0:
         return phase, np.zeros(n), np.zeros(n)
-    c = cid[idx]  # non-decreasing; every chain has its start move in ``idx``
+    # the chain of each move in ``idx`` (every chain starts at a move in ``idx``)
+    c = np.cumsum(~cont[idx]) - 1
     edge = c[1:] != c[:-1]
     first = idx[np.concatenate([[True], edge])]
     last = idx[np.concatenate([edge, [True]])]
@@ -973,8 +978,10 @@ def build_profile(
         del v
     v0, peak, v1, time, d_cr = speeds
     if jerk_limited:
-        _, dv_up, lo_up = _ramp_changes(v0, peak, v1, d_cr, rising=True)
-        _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, d_cr, rising=False)
+        marks = _ramp_marks(v0, peak, v1, d_cr)
+        _, dv_up, lo_up = _ramp_changes(v0, peak, v1, marks, rising=True)
+        _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, marks, rising=False)
+        del marks
         ramps = (lo_up, dv_up, lo_dn, dv_dn, acc, jerk)
     else:
         ramps = None
