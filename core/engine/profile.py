@@ -745,12 +745,18 @@ class _Rounds:
         """One round from the boundary speeds ``v``: the accelerations of the next (in
         place); returns the largest relative change, as :func:`build_profile` measures it."""
         a_up, a_dn = self.a_up, self.a_dn
+        between = self.holds.between
         n = a_up.size
         peak = np.empty(n)
         rise = np.empty(n, dtype=bool)
         fall = np.empty(n, dtype=bool)
+        # through[k + 1]: move k accelerates to its very end (rising) or brakes from its very
+        # start (falling) and so links its ramp to the next or the previous move
+        through_up = np.zeros(n + 1, dtype=bool)
+        through_dn = np.zeros(n + 1, dtype=bool)
         size = min(n, CACHE_PIECE)
         sq, tmp, lim = np.empty(size + 1), np.empty(size), np.empty(size)
+        one = np.empty(size, dtype=bool)
         # In pieces (elementwise: the same values), their temporaries in the cache.
         with np.errstate(divide="ignore", invalid="ignore"):
             for s in pieces(n, CACHE_PIECE):
@@ -760,7 +766,7 @@ class _Rounds:
                 # the peak of _moves: (2 L + v0^2 / a_up + v1^2 / a_dn) / (1/a_up + 1/a_dn)
                 np.multiply(vv, vv, out=q)
                 np.divide(q[:-1], a_up[s], out=pk)
-                np.multiply(self.holds.between[s], 2.0, out=li)
+                np.multiply(between[s], 2.0, out=li)
                 pk += li
                 np.divide(q[1:], a_dn[s], out=t)
                 pk += t
@@ -774,33 +780,33 @@ class _Rounds:
                 np.maximum(pk, 1.0, out=t)
                 t *= TOL.rel_equal
                 np.add(v0, t, out=li)
-                np.greater(pk, li, out=rise[s])
+                r = np.greater(pk, li, out=rise[s])
                 np.add(v1, t, out=li)
-                np.greater(pk, li, out=fall[s])
-        del sq, tmp, lim
+                f = np.greater(pk, li, out=fall[s])
+                # the cruise length (_moves' d_cr) of the moves that only accelerate or only
+                # brake: through their end or from their start if it is nil
+                x = np.flatnonzero(np.not_equal(r, f, out=one[:m]))
+                if x.size == 0:
+                    continue
+                px = pk[x]
+                pk2 = px * px
+                vx = v0[x]
+                up = pk2 - vx * vx
+                up /= 2 * a_up[s][x]
+                d_cr = between[s][x] - up
+                vx = v1[x]
+                up = pk2 - vx * vx
+                up /= 2 * a_dn[s][x]
+                d_cr -= up
+                np.maximum(d_cr, 0.0, out=d_cr)
+                flat = d_cr <= TOL.nil_distance
+                at = x + (s.start + 1)
+                through_up[at] = r[x] & flat
+                through_dn[at] = f[x] & flat
+        del sq, tmp, lim, one
         v0, v1 = v[:-1], v[1:]
-        # the cruise length of the moves that only accelerate or only brake (_moves' d_cr)
-        x = np.flatnonzero(rise != fall)
-        pk = peak[x]
-        pk2 = pk * pk
-        vx = v0[x]
-        up = pk2 - vx * vx
-        up /= 2 * a_up[x]
-        d_cr = self.holds.between[x] - up
-        vx = v1[x]
-        up = pk2 - vx * vx
-        up /= 2 * a_dn[x]
-        d_cr -= up
-        np.maximum(d_cr, 0.0, out=d_cr)
-        flat = d_cr <= TOL.nil_distance
-        n = peak.size
-        # through[k + 1]: move k accelerates to its very end (rising) or brakes from its very
-        # start (falling) and so links its ramp to the next or the previous move
-        through = np.zeros(n + 1, dtype=bool)
-        through[x + 1] = rise[x] & flat
-        change_up = self._direction(True, rise, through, v0, v1, peak)
-        through[x + 1] = fall[x] & flat
-        change_dn = self._direction(False, fall, through, v0, v1, peak)
+        change_up = self._direction(True, rise, through_up, v0, v1, peak)
+        change_dn = self._direction(False, fall, through_dn, v0, v1, peak)
         return max(change_up, change_dn)
 
     def _effective(self, rising: bool, idx: NDArray, dv: NDArray) -> NDArray:
