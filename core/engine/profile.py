@@ -161,6 +161,8 @@ def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[ND
     jerk = np.asarray(jerk, dtype=np.float64)
     # axis by axis (the minimum is exact, so the same values as over the (n, 3) array at
     # once, without its temporaries and its slow row-wise minimum)
+    acc = np.broadcast_to(acc, share.shape[1:])  # (the shapes the (n, 3) way allowed)
+    jerk = np.broadcast_to(jerk, share.shape[1:])
     a = np.full(share.shape[0], np.inf)
     j = np.full(share.shape[0], np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
