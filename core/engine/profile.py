@@ -721,7 +721,7 @@ class _Rounds:
     """
 
     def __init__(self, caps, cap, acc, jerk, holds: _Holds) -> None:
-        self.b2 = caps * caps
+        self.caps = caps
         self.cap, self.acc, self.jerk, self.holds = cap, acc, jerk, holds
         self.a_up, self.a_dn = acc.copy(), acc.copy()
         self.term_up = _pass_terms(self.a_up, holds.inner)
@@ -741,7 +741,7 @@ class _Rounds:
 
     def passes(self) -> NDArray:
         """:func:`_passes` at the current accelerations."""
-        return _passes_of(self.b2, self.term_up, self.term_dn)
+        return _passes_of(self.caps * self.caps, self.term_up, self.term_dn)
 
     def step(self, v: NDArray) -> float:
         """One round from the boundary speeds ``v``: the accelerations of the next (in
@@ -811,7 +811,7 @@ class _Rounds:
         change_dn = self._direction(False, fall, through_dn, v0, v1, peak)
         return max(change_up, change_dn)
 
-    def _effective(self, rising: bool, idx: NDArray, dv: NDArray) -> NDArray:
+    def _effective(self, rising: bool, idx: NDArray, dv: NDArray, at: NDArray | slice) -> NDArray:
         """:func:`effective_acceleration` of the moves ``idx`` in ramps of speed change
         ``dv``, recomputed only where ``dv`` is not last round's (from one round to the next,
         most ramps are the same)."""
@@ -823,12 +823,35 @@ class _Rounds:
                 k = idx[new]
                 eff[new] = effective_acceleration(dv[new], self.acc[k], self.jerk[k])
         else:
-            eff = effective_acceleration(dv, self.acc[idx], self.jerk[idx])
+            eff = effective_acceleration(dv, self.acc[at], self.jerk[at])
+        # kept for the next round where the ramps are a part of the moves only (where all
+        # are, most change: 1M arcs, 48 MB for nothing)
+        keep = (idx, dv, eff) if 4 * idx.size <= self.acc.size else None
         if rising:
-            self.last_up = (idx, dv, eff)
+            self.last_up = keep
         else:
-            self.last_dn = (idx, dv, eff)
+            self.last_dn = keep
         return eff
+
+    def _chains(self, rising, idx, at, cont, start, through, v0, v1, peak) -> NDArray:
+        """The effective acceleration of the moves ``idx`` in ramps that chain moves end to
+        end (``start``: a move begins its ramp): each move gets its ramp's whole speed
+        change, from the ramp's first move to its last."""
+        c = np.cumsum(start) - 1
+        first = idx[start]
+        last_of = np.empty(idx.size, dtype=bool)
+        last_of[:-1] = start[1:]
+        last_of[-1] = True
+        end = idx[last_of]
+        if rising:
+            lo = v0[first]
+            hi = np.where(through[end + 1], v1[end], peak[end])
+        else:
+            hi = np.where(through[first + 1], v0[first], peak[first])
+            lo = v1[end]
+        dv = (hi - lo)[c]
+        del cont, start, c, first, last_of, end, lo, hi
+        return self._effective(rising, idx, dv, at)
 
     def _direction(self, rising, phase, through, v0, v1, peak) -> float:
         """The next accelerations of one direction (updated in place, with the passes' terms
@@ -845,6 +868,8 @@ class _Rounds:
             a, last, term = self.a_dn, self.step_dn, self.term_dn
         acc = self.acc
         idx = np.flatnonzero(phase)
+        # every move in a ramp (1M arcs): the whole columns, not gathered copies
+        at: NDArray | slice = slice(None) if idx.size == a.size else idx
         if idx.size:
             # chains of moves accelerating (braking) end to end: a move continues the chain
             # of the one before when that one accelerates through its end (rising), or when
@@ -856,19 +881,19 @@ class _Rounds:
                 cont[0] = False
                 cont[1:] &= np.diff(idx) == 1
             start = ~cont
-            c = np.cumsum(start) - 1
-            first = idx[start]
-            last_of = np.empty(idx.size, dtype=bool)
-            last_of[:-1] = start[1:]
-            last_of[-1] = True
-            end = idx[last_of]
-            if rising:
-                lo = v0[first]
-                hi = np.where(through[end + 1], v1[end], peak[end])
+            if start.all():  # every move a ramp of its own: its own first and last
+                if rising:
+                    lo = v0[at]
+                    hi = np.where(through[idx + 1], v1[at], peak[at])
+                else:
+                    hi = np.where(through[idx + 1], v0[at], peak[at])
+                    lo = v1[at]
+                dv = hi - lo
+                del cont, start, lo, hi
+                eff = self._effective(rising, idx, dv, at)
+                del dv
             else:
-                hi = np.where(through[first + 1], v0[first], peak[first])
-                lo = v1[end]
-            eff = self._effective(rising, idx, (hi - lo)[c])
+                eff = self._chains(rising, idx, at, cont, start, through, v0, v1, peak)
         else:
             eff = np.zeros(0)
         # The step (and the damping) is nil wherever the new acceleration is the current
@@ -876,13 +901,19 @@ class _Rounds:
         # current one is the machine's (``off`` marks where it is not). So both only where
         # they differ: in the later rounds a few moves in a thousand.
         off = self.off_up if rising else self.off_dn
-        old_in = a[idx]
+        old_in = a[at]
         differ = eff != old_in
         rest = np.flatnonzero(off & ~phase)
-        cand = np.concatenate([idx[differ], rest])
-        new = np.concatenate([eff[differ], acc[rest]])
-        old = np.concatenate([old_in[differ], a[rest]])
-        del old_in, differ, rest
+        cand: NDArray | slice
+        if rest.size:
+            cand = np.concatenate([idx[differ], rest])
+            new = np.concatenate([eff[differ], acc[rest]])
+            old = np.concatenate([old_in[differ], a[rest]])
+        elif differ.all():  # every move in a ramp changes (arcs: the first rounds)
+            cand, new, old = at, eff, old_in
+        else:
+            cand, new, old = idx[differ], eff[differ], old_in[differ]
+        del idx, eff, old_in, differ, rest
         sign = np.sign(new - old)
         back = sign * last[cand] < 0
         out = np.where(back, np.sqrt(old * new), new)
@@ -892,7 +923,11 @@ class _Rounds:
             change = float(np.nanmax(np.abs(out / old - 1.0), initial=0.0))
         # the terms and the denominator follow where the acceleration changed
         moved = out != old
-        cand, out = cand[moved], out[moved]
+        del new, old, sign, back
+        if not moved.all():
+            cand = np.flatnonzero(moved) if isinstance(cand, slice) else cand[moved]
+            out = out[moved]
+        del moved
         a[cand] = out
         off[cand] = out != acc[cand]
         term[cand] = _pass_terms(out, self.holds.inner[cand])
