@@ -11,6 +11,7 @@ machine's path speed limit (all axes together, ``max_path_feed``) caps every blo
 from __future__ import annotations
 
 import numpy as np
+from numpy.typing import NDArray
 
 from core import Indicator, Machine, ToolPath, hookimpl
 
@@ -23,11 +24,9 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     """Cap feed blocks programmed above min_k Vmax_k / (share of axis k)."""
     tp = toolpath
     i = np.flatnonzero(tp.is_feed)
-    share = tp.axis_share[i]
-    with np.errstate(divide="ignore"):
-        per_axis = np.where(share > 0, machine.max_feed / share, np.inf)
-    axis = np.argmin(per_axis, axis=1)
-    cap = per_axis[np.arange(i.size), axis]
+    share = tp.axis_share
+    vmax = np.broadcast_to(np.asarray(machine.max_feed, dtype=np.float64), share.shape[1:])
+    cap, axis = _lowest_axis(share, i, vmax)
     # the path speed limit over all axes (LinuxCNC's [TRAJ]MAX_LINEAR_VELOCITY)
     path = cap > machine.max_path_feed
     cap = np.where(path, machine.max_path_feed, cap)
@@ -43,3 +42,28 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             labels=LABELS,
         )
     ]
+
+
+def _lowest_axis(share_all: NDArray, i: NDArray, vmax: NDArray) -> tuple[NDArray, NDArray]:
+    """min_k Vmax_k / share_k over the moves ``i`` (inf where an axis has no share) and the
+    first axis k that gives it: axis by axis, without (m, 3) temporaries (the same values
+    as a row-wise argmin, which with no NaN is the first lowest)."""
+    if np.isnan(vmax).any():  # argmin's NaN rule: the row-wise way
+        share = share_all[i]
+        with np.errstate(divide="ignore"):
+            per_axis = np.where(share > 0, vmax / share, np.inf)
+        axis = np.argmin(per_axis, axis=1)
+        return per_axis[np.arange(i.size), axis], axis
+    cap = np.full(i.size, np.inf)
+    axis = np.zeros(i.size, dtype=np.intp)
+    with np.errstate(divide="ignore"):
+        for k in range(share_all.shape[1]):
+            share = share_all[:, k][i]
+            per = np.where(share > 0, vmax[k] / share, np.inf)
+            lower = per < cap
+            if k == 0:
+                cap = per
+            else:
+                np.copyto(cap, per, where=lower)
+                axis[lower] = k
+    return cap, axis

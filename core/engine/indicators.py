@@ -282,6 +282,14 @@ def _blend_block_time(
     return out
 
 
+def _zeros(values: NDArray) -> bool:
+    """Whether ``values`` is one +0.0 broadcast over its places (a column with no value)."""
+    return values.strides == (0,) and bool(values.size) and values.flat[0].tobytes() == _ZERO
+
+
+_ZERO = np.float64(0.0).tobytes()
+
+
 def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator]) -> Evaluation:
     """Keep, per junction and per element, the lowest feed any indicator allows."""
     tp = toolpath
@@ -312,27 +320,40 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         nids = np.broadcast_to(CODE(nid), ind.index.shape)
         parts[ind.at].append((ind.index, ind.feed, nids, limit, hold, travel))
 
-    def lowest(kind: str) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+    def lowest(kind: str) -> tuple[NDArray, NDArray, NDArray, NDArray, tuple[NDArray, ...]]:
         # Dense passes over the junctions (or elements), no sort: the first indicator to
         # report a place claims it (so a record with no limit, feed inf, still names its
         # indicator), then any lower feed takes it over; ties keep the earlier indicator.
-        size = max(tp.n - 1, 0) if kind == "junction" else tp.n
+        # The holds only at junctions (the elements' are not used). A record that claims
+        # all its places writes its columns as they are (no gathered copies), and a column
+        # of zeros (no hold) goes where the holds are zero still.
+        junction = kind == "junction"
+        size = max(tp.n - 1, 0) if junction else tp.n
         feed = np.full(size, np.inf)
         ind = np.full(size, -1, dtype=CODE)
         lim = np.zeros(size, dtype=CODE)
-        hold = np.zeros((2, size))
+        hold: tuple[NDArray, ...] = (np.zeros(size), np.zeros(size)) if junction else ()
         for idx, f, i, lab, h, t in parts[kind]:
             new = ind[idx] < 0
-            sel = idx[new]
-            feed[sel], ind[sel], lim[sel] = f[new], i[new], lab[new]
-            hold[0, sel], hold[1, sel] = h[new], t[new]
+            if new.all():
+                sel = idx
+                feed[sel], ind[sel], lim[sel] = f, i, lab
+                cols = (h, t) if junction else ()
+            else:
+                sel = idx[new]
+                feed[sel], ind[sel], lim[sel] = f[new], i[new], lab[new]
+                cols = (h[new], t[new]) if junction else ()
+            for col, values in zip(hold, cols, strict=True):
+                if not _zeros(values):
+                    col[sel] = values
         for idx, f, i, lab, h, t in parts[kind]:
             better = f < feed[idx]
             sel = idx[better]
             feed[sel], ind[sel], lim[sel] = f[better], i[better], lab[better]
-            hold[0, sel], hold[1, sel] = h[better], t[better]
+            if junction:
+                hold[0][sel], hold[1][sel] = h[better], t[better]
         where = np.flatnonzero(ind >= 0)
-        return where, feed[where], ind[where], lim[where], hold[:, where]
+        return where, feed[where], ind[where], lim[where], tuple(col[where] for col in hold)
 
     j, jfeed, jind, jlim, jhold = lowest("junction")
     jprog = np.fmin(tp.feed[j], tp.feed[j + 1])

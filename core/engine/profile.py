@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import Evaluation
+from core.model.pieces import pieces
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
 
@@ -63,6 +64,8 @@ from core.model.toolpath import PathMode, ToolPath
 #: speed changes, hence a lower A_eff), contracting by about 4 in log per round.
 JERK_ROUNDS = 12
 JERK_CONVERGED = 1e-4
+#: Moves per piece of a round's elementwise work: its temporaries stay in the cache.
+CACHE_PIECE = 1 << 14
 
 
 def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
@@ -156,9 +159,18 @@ def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[ND
     share = tp.axis_share
     acc = np.asarray(acc, dtype=np.float64)
     jerk = np.asarray(jerk, dtype=np.float64)
+    # axis by axis (the minimum is exact, so the same values as over the (n, 3) array at
+    # once, without its temporaries and its slow row-wise minimum)
+    acc = np.broadcast_to(acc, share.shape[1:])  # (the shapes the (n, 3) way allowed)
+    jerk = np.broadcast_to(jerk, share.shape[1:])
+    a = np.full(share.shape[0], np.inf)
+    j = np.full(share.shape[0], np.inf)
     with np.errstate(divide="ignore", invalid="ignore"):
-        a = np.where(share > 0, acc[None, :] / share, np.inf).min(axis=1)
-        j = np.where(share > 0, jerk[None, :] / share, np.inf).min(axis=1)
+        for k in range(share.shape[1]):
+            col = share[:, k]
+            moves = col > 0
+            np.minimum(a, np.where(moves, acc[k] / col, np.inf), out=a)
+            np.minimum(j, np.where(moves, jerk[k] / col, np.inf), out=j)
     # A move with no direction (zero length, NaN) gets the lowest axis limits.
     a = np.where(np.isfinite(a), a, acc.min())
     j = np.where(np.isnan(j) | (np.isinf(j) & np.isfinite(jerk).all()), jerk.min(), j)
@@ -501,22 +513,31 @@ def _passes(b: NDArray, inner: NDArray, a_up: NDArray, a_dn: NDArray) -> NDArray
     The machine changes speed only between the holds at the ends of each move (the inserted
     arc of a corner, a curvature transition): the passes use the length left between them,
     ``inner`` = max(length - holds, 0). At a boundary whose cap does not bind, the hold then
-    runs at the boundary's speed, which is slightly conservative. (Written with ``out=``:
-    the same operations in the same order, without a temporary per step.)
+    runs at the boundary's speed, which is slightly conservative.
     """
-    n1 = b.size
-    b2 = b * b
+    return _passes_of(b * b, _pass_terms(a_up, inner), _pass_terms(a_dn, inner))
+
+
+def _pass_terms(a: NDArray, inner: NDArray) -> NDArray:
+    """(n,) 2 a L of every move: the steps of the acceleration-weighted length W."""
+    tmp = np.multiply(a, inner)
+    tmp *= 2.0
+    return tmp
+
+
+def _passes_of(b2: NDArray, up: NDArray, dn: NDArray) -> NDArray:
+    """:func:`_passes` from the squared caps ``b2`` and the :func:`_pass_terms` of both
+    directions (the rounds of :func:`build_profile` keep the terms and renew only those of
+    the moves whose acceleration changed). (Written with ``out=``: the same operations in
+    the same order, without a temporary per step.)"""
+    n1 = b2.size
     w = np.empty(n1)
     w[0] = 0.0
-    tmp = np.multiply(a_up, inner)
-    tmp *= 2.0
-    np.cumsum(tmp, out=w[1:])
+    np.cumsum(up, out=w[1:])
     fwd = np.subtract(b2, w)
     np.minimum.accumulate(fwd, out=fwd)
     fwd += w
-    np.multiply(a_dn, inner, out=tmp)
-    tmp *= 2.0
-    np.cumsum(tmp, out=w[1:])
+    np.cumsum(dn, out=w[1:])
     bwd = np.add(b2, w)
     rev = bwd[::-1]
     np.minimum.accumulate(rev, out=rev)
@@ -591,10 +612,22 @@ class _Holds:
 def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds):
     """Entry, peak, exit speed and time of every move from its boundary speeds; the holds
     at its ends run at the entry and exit speed (over ``r * h`` of actual travel).
-    (Written with ``out=``: the same operations in the same order, fewer temporaries.)"""
+    (Elementwise, in pieces of :data:`CACHE_PIECE` moves, their temporaries in the cache:
+    the same values as over all the moves at once.)"""
     v0, v1 = v[:-1], v[1:]
-    t_hold = holds.time(v0, v1)
-    length = holds.between
+    t = holds.time(v0, v1)  # the holds' time, then the whole time
+    n = v0.size
+    peak, d_cr = np.empty(n), np.empty(n)
+    for s in pieces(n, CACHE_PIECE):
+        peak[s], d_cr[s], t[s] = _move_piece(
+            v[s.start : s.stop + 1], cap[s], a_up[s], a_dn[s], holds.between[s], t[s]
+        )
+    return v0, peak, v1, t, d_cr
+
+
+def _move_piece(v, cap, a_up, a_dn, length, t_hold):
+    """:func:`_moves` of consecutive moves: peak speed, cruise length, time."""
+    v0, v1 = v[:-1], v[1:]
     v0sq = v0 * v0  # v**2 of a float64 array is v * v
     v1sq = v1 * v1
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -605,7 +638,6 @@ def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds
         den = 1.0 / a_up
         den += 1.0 / a_dn
         peak /= den
-        del den  # (each temporary goes once spent: 1M moves, the profile's peak)
     np.maximum(peak, 0.0, out=peak)
     np.sqrt(peak, out=peak)
     np.minimum(cap, peak, out=peak)
@@ -617,51 +649,52 @@ def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds
     pk2 = peak * peak
     # d_cr = max(L - (peak^2 - v0^2) / (2 a_up) - (peak^2 - v1^2) / (2 a_dn), 0)
     up = pk2 - v0sq
-    del v0sq
     up /= 2 * a_up
     d_cr = length - up
     np.subtract(pk2, v1sq, out=up)
-    del pk2, v1sq
     up /= 2 * a_dn
     d_cr -= up
-    del up
     np.maximum(d_cr, 0.0, out=d_cr)
     with np.errstate(divide="ignore", invalid="ignore"):
         t_cr = np.where(peak > 0, d_cr / peak, 0.0)
     t += t_cr
-    del t_cr
     t += t_dn
     t += t_hold
-    return v0, peak, v1, t, d_cr
+    return peak, d_cr, t
 
 
-def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, NDArray]:
+def _ramp_marks(v0, peak, v1, d_cr) -> tuple[NDArray, NDArray, NDArray]:
+    """Which moves accelerate (peak above the entry speed), which brake (above the exit
+    speed), and which cruise over no length, for :func:`_ramp_changes`."""
+    tol = TOL.rel_equal * np.maximum(peak, 1.0)
+    rise = peak > v0 + tol
+    fall = peak > v1 + tol
+    return rise, fall, d_cr <= TOL.nil_distance
+
+
+def _ramp_changes(v0, peak, v1, marks, rising: bool) -> tuple[NDArray, NDArray, NDArray]:
     """For each move, whether it has an acceleration (or braking) phase, the whole speed
     change of the ramp that phase belongs to (chains of moves accelerating end to end), and
-    the ramp's lower speed (where an acceleration starts, where a braking ends)."""
+    the ramp's lower speed (where an acceleration starts, where a braking ends); ``marks``
+    from :func:`_ramp_marks`."""
     n = v0.size
-    tol = TOL.rel_equal * np.maximum(peak, 1.0)
+    rise, fall, flat = marks
     if rising:
-        phase = peak > v0 + tol
-        through = (
-            phase & ~(peak > v1 + tol) & (d_cr <= TOL.nil_distance)
-        )  # accelerating to its very end
+        phase = rise
+        through = phase & ~fall & flat  # accelerating to its very end
         cont = np.zeros(n, dtype=bool)
         cont[1:] = through[:-1] & phase[1:]
     else:
-        phase = peak > v1 + tol
-        through = (
-            phase & ~(peak > v0 + tol) & (d_cr <= TOL.nil_distance)
-        )  # braking from its very start
+        phase = fall
+        through = phase & ~rise & flat  # braking from its very start
         cont = np.zeros(n, dtype=bool)
         cont[1:] = through[1:] & phase[:-1]
         # a braking chain runs forward from its first move; "cont[k]" links k-1 -> k
-    start = phase & ~cont
-    cid = np.cumsum(start) - 1
     idx = np.flatnonzero(phase)
     if idx.size == 0:
         return phase, np.zeros(n), np.zeros(n)
-    c = cid[idx]  # non-decreasing; every chain has its start move in ``idx``
+    # the chain of each move in ``idx`` (every chain starts at a move in ``idx``)
+    c = np.cumsum(~cont[idx]) - 1
     edge = c[1:] != c[:-1]
     first = idx[np.concatenate([[True], edge])]
     last = idx[np.concatenate([edge, [True]])]
@@ -678,22 +711,242 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, N
     return phase, dv, low
 
 
-def _ramp_acceleration(phase: NDArray, dv: NDArray, acc: NDArray, jerk: NDArray) -> NDArray:
-    """``acc`` with the effective acceleration of its ramp on every move in a ramp phase
-    (computed on those moves only: on long programs most moves cruise)."""
-    out = acc.copy()
-    idx = np.flatnonzero(phase)
-    out[idx] = effective_acceleration(dv[idx], acc[idx], jerk[idx])
-    return out
+class _Rounds:
+    """The rounds of the jerk iteration of :func:`build_profile`, without the (n,) work a
+    round's result does not need.
 
+    A round needs, of the speeds, only where each move accelerates or brakes (its peak
+    against its entry and exit speed) and, on the moves that do one of them only, whether
+    they cruise; the times, and the cruise lengths elsewhere, are for the last round alone
+    (:func:`_moves`). The accelerations change on the moves in a ramp (a fifth of a
+    finishing raster's) and where they had changed before, so the new accelerations, the
+    damping and the terms the passes sum are computed there only, and ``a_up``, ``a_dn``
+    (updated in place) keep the rest. Every value is the same arithmetic on the same
+    numbers as :func:`_moves` and :func:`_ramp_changes` over all the moves (and as the
+    effective accelerations and their damping over all of them were): the profile is bit
+    for bit the same.
+    """
 
-def _damped(a: NDArray, new: NDArray, last: NDArray) -> tuple[NDArray, NDArray]:
-    """The next accelerations of the jerk iteration, and the sign of each step (-1, 0, 1):
-    the geometric mean of ``a`` and ``new`` where the step reverses the last one."""
-    step = np.sign(new - a)
-    back = step * last < 0
-    out = np.where(back, np.sqrt(a * new), new)
-    return out, np.sign(out - a).astype(np.int8)  # -1, 0, 1: one byte a move
+    def __init__(self, caps, cap, acc, jerk, holds: _Holds) -> None:
+        self.caps = caps
+        self.cap, self.acc, self.jerk, self.holds = cap, acc, jerk, holds
+        self.a_up, self.a_dn = acc.copy(), acc.copy()
+        self.term_up = _pass_terms(self.a_up, holds.inner)
+        self.term_dn = self.term_up.copy()
+        with np.errstate(divide="ignore", invalid="ignore"):
+            self.den = 1.0 / self.a_up
+            self.den += 1.0 / self.a_dn
+        n = acc.size
+        self.step_up = np.zeros(n, dtype=np.int8)
+        self.step_dn = np.zeros(n, dtype=np.int8)
+        # where the acceleration is not the machine's
+        self.off_up = self.a_up != acc
+        self.off_dn = self.off_up.copy()
+        # last round's ramps (moves, speed changes, effective accelerations) per direction
+        self.last_up: tuple[NDArray, NDArray, NDArray] | None = None
+        self.last_dn: tuple[NDArray, NDArray, NDArray] | None = None
+
+    def passes(self) -> NDArray:
+        """:func:`_passes` at the current accelerations."""
+        return _passes_of(self.caps * self.caps, self.term_up, self.term_dn)
+
+    def step(self, v: NDArray) -> float:
+        """One round from the boundary speeds ``v``: the accelerations of the next (in
+        place); returns the largest relative change, as :func:`build_profile` measures it."""
+        a_up, a_dn = self.a_up, self.a_dn
+        between = self.holds.between
+        n = a_up.size
+        peak = np.empty(n)
+        rise = np.empty(n, dtype=bool)
+        fall = np.empty(n, dtype=bool)
+        # through[k + 1]: move k accelerates to its very end (rising) or brakes from its very
+        # start (falling) and so links its ramp to the next or the previous move
+        through_up = np.zeros(n + 1, dtype=bool)
+        through_dn = np.zeros(n + 1, dtype=bool)
+        size = min(n, CACHE_PIECE)
+        sq, tmp, lim = np.empty(size + 1), np.empty(size), np.empty(size)
+        one = np.empty(size, dtype=bool)
+        # In pieces (elementwise: the same values), their temporaries in the cache.
+        with np.errstate(divide="ignore", invalid="ignore"):
+            for s in pieces(n, CACHE_PIECE):
+                m = s.stop - s.start
+                vv, q, t, li, pk = v[s.start : s.stop + 1], sq[: m + 1], tmp[:m], lim[:m], peak[s]
+                v0, v1 = vv[:-1], vv[1:]
+                # the peak of _moves: (2 L + v0^2 / a_up + v1^2 / a_dn) / (1/a_up + 1/a_dn)
+                np.multiply(vv, vv, out=q)
+                np.divide(q[:-1], a_up[s], out=pk)
+                np.multiply(between[s], 2.0, out=li)
+                pk += li
+                np.divide(q[1:], a_dn[s], out=t)
+                pk += t
+                pk /= self.den[s]
+                np.maximum(pk, 0.0, out=pk)
+                np.sqrt(pk, out=pk)
+                np.minimum(self.cap[s], pk, out=pk)
+                np.maximum(v0, v1, out=t)
+                np.maximum(pk, t, out=pk)
+                # _ramp_changes: which moves accelerate (peak above v0), which brake (v1)
+                np.maximum(pk, 1.0, out=t)
+                t *= TOL.rel_equal
+                np.add(v0, t, out=li)
+                r = np.greater(pk, li, out=rise[s])
+                np.add(v1, t, out=li)
+                f = np.greater(pk, li, out=fall[s])
+                # the cruise length (_moves' d_cr) of the moves that only accelerate or only
+                # brake: through their end or from their start if it is nil
+                x = np.flatnonzero(np.not_equal(r, f, out=one[:m]))
+                if x.size == 0:
+                    continue
+                px = pk[x]
+                pk2 = px * px
+                vx = v0[x]
+                up = pk2 - vx * vx
+                up /= 2 * a_up[s][x]
+                d_cr = between[s][x] - up
+                vx = v1[x]
+                up = pk2 - vx * vx
+                up /= 2 * a_dn[s][x]
+                d_cr -= up
+                np.maximum(d_cr, 0.0, out=d_cr)
+                flat = d_cr <= TOL.nil_distance
+                at = x + (s.start + 1)
+                through_up[at] = r[x] & flat
+                through_dn[at] = f[x] & flat
+        del sq, tmp, lim, one
+        v0, v1 = v[:-1], v[1:]
+        change_up = self._direction(True, rise, through_up, v0, v1, peak)
+        change_dn = self._direction(False, fall, through_dn, v0, v1, peak)
+        return max(change_up, change_dn)
+
+    def _effective(self, rising: bool, idx: NDArray, dv: NDArray, at: NDArray | slice) -> NDArray:
+        """:func:`effective_acceleration` of the moves ``idx`` in ramps of speed change
+        ``dv``, recomputed only where ``dv`` is not last round's (from one round to the next,
+        most ramps are the same)."""
+        last = self.last_up if rising else self.last_dn
+        if last is not None and np.array_equal(last[0], idx):
+            eff = last[2].copy()
+            new = np.flatnonzero(dv != last[1])
+            if new.size:
+                k = idx[new]
+                eff[new] = effective_acceleration(dv[new], self.acc[k], self.jerk[k])
+        else:
+            eff = effective_acceleration(dv, self.acc[at], self.jerk[at])
+        # kept for the next round where the ramps are a part of the moves only (where all
+        # are, most change: 1M arcs, 48 MB for nothing)
+        keep = (idx, dv, eff) if 4 * idx.size <= self.acc.size else None
+        if rising:
+            self.last_up = keep
+        else:
+            self.last_dn = keep
+        return eff
+
+    def _chains(self, rising, idx, at, cont, start, through, v0, v1, peak) -> NDArray:
+        """The effective acceleration of the moves ``idx`` in ramps that chain moves end to
+        end (``start``: a move begins its ramp): each move gets its ramp's whole speed
+        change, from the ramp's first move to its last."""
+        c = np.cumsum(start) - 1
+        first = idx[start]
+        last_of = np.empty(idx.size, dtype=bool)
+        last_of[:-1] = start[1:]
+        last_of[-1] = True
+        end = idx[last_of]
+        if rising:
+            lo = v0[first]
+            hi = np.where(through[end + 1], v1[end], peak[end])
+        else:
+            hi = np.where(through[first + 1], v0[first], peak[first])
+            lo = v1[end]
+        dv = (hi - lo)[c]
+        del cont, start, c, first, last_of, end, lo, hi
+        return self._effective(rising, idx, dv, at)
+
+    def _direction(self, rising, phase, through, v0, v1, peak) -> float:
+        """The next accelerations of one direction (updated in place, with the passes' terms
+        and the peak's denominator); returns the largest relative change.
+
+        :func:`_ramp_changes` on the moves in a ramp phase gives each the speed change of
+        its ramp, hence its effective acceleration (``acc`` elsewhere); where a move's
+        A_eff turns back against its last step, the geometric mean of the old and the new
+        (the damping). Both only where a ramp phase is or the acceleration is not
+        ``acc``: elsewhere the new one is the old one."""
+        if rising:
+            a, last, term = self.a_up, self.step_up, self.term_up
+        else:
+            a, last, term = self.a_dn, self.step_dn, self.term_dn
+        acc = self.acc
+        idx = np.flatnonzero(phase)
+        # every move in a ramp (1M arcs): the whole columns, not gathered copies
+        at: NDArray | slice = slice(None) if idx.size == a.size else idx
+        if idx.size:
+            # chains of moves accelerating (braking) end to end: a move continues the chain
+            # of the one before when that one accelerates through its end (rising), or when
+            # it brakes from its own start and the one before brakes too (falling)
+            if rising:
+                cont = through[idx]
+            else:
+                cont = through[idx + 1]
+                cont[0] = False
+                cont[1:] &= np.diff(idx) == 1
+            start = ~cont
+            if start.all():  # every move a ramp of its own: its own first and last
+                if rising:
+                    lo = v0[at]
+                    hi = np.where(through[idx + 1], v1[at], peak[at])
+                else:
+                    hi = np.where(through[idx + 1], v0[at], peak[at])
+                    lo = v1[at]
+                dv = hi - lo
+                del cont, start, lo, hi
+                eff = self._effective(rising, idx, dv, at)
+                del dv
+            else:
+                eff = self._chains(rising, idx, at, cont, start, through, v0, v1, peak)
+        else:
+            eff = np.zeros(0)
+        # The step (and the damping) is nil wherever the new acceleration is the current
+        # one: in a ramp phase where A_eff is the current acceleration, outside wherever the
+        # current one is the machine's (``off`` marks where it is not). So both only where
+        # they differ: in the later rounds a few moves in a thousand.
+        off = self.off_up if rising else self.off_dn
+        old_in = a[at]
+        differ = eff != old_in
+        rest = np.flatnonzero(off & ~phase)
+        cand: NDArray | slice
+        if rest.size:
+            cand = np.concatenate([idx[differ], rest])
+            new = np.concatenate([eff[differ], acc[rest]])
+            old = np.concatenate([old_in[differ], a[rest]])
+        elif differ.all():  # every move in a ramp changes (arcs: the first rounds)
+            cand, new, old = at, eff, old_in
+        else:
+            cand, new, old = idx[differ], eff[differ], old_in[differ]
+        del idx, eff, old_in, differ, rest
+        sign = np.sign(new - old)
+        back = sign * last[cand] < 0
+        out = np.where(back, np.sqrt(old * new), new)
+        step = np.zeros(a.size, dtype=np.int8)
+        step[cand] = np.sign(out - old).astype(np.int8)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            change = float(np.nanmax(np.abs(out / old - 1.0), initial=0.0))
+        # the terms and the denominator follow where the acceleration changed
+        moved = out != old
+        del new, old, sign, back
+        if not moved.all():
+            cand = np.flatnonzero(moved) if isinstance(cand, slice) else cand[moved]
+            out = out[moved]
+        del moved
+        a[cand] = out
+        off[cand] = out != acc[cand]
+        term[cand] = _pass_terms(out, self.holds.inner[cand])
+        with np.errstate(divide="ignore", invalid="ignore"):
+            den = 1.0 / self.a_up[cand]
+            den += 1.0 / self.a_dn[cand]
+        self.den[cand] = den
+        if rising:
+            self.step_up = step
+        else:
+            self.step_dn = step
+        return change
 
 
 def build_profile(
@@ -769,41 +1022,39 @@ def build_profile(
         h_start[j[free] + 1] *= keep[j[free] + 1]
     holds = _Holds(length, h_start, h_end, r_start, r_end)
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
-    a_up, a_dn = acc.copy(), acc.copy()
-    step_up = np.zeros(tp.n, dtype=np.int8)
-    step_dn = np.zeros(tp.n, dtype=np.int8)
+    jerk_limited = bool(np.isfinite(jerk).any())
+    # The rounds change the accelerations only (see _Rounds); the last one (the rounds' end,
+    # or the first whose change is below JERK_CONVERGED) makes the speeds and times.
+    rnd = _Rounds(caps, cap, acc, jerk, holds)
+    a_up, a_dn = rnd.a_up, rnd.a_dn
+    last_round = max(rounds, 1) - 1
+    speeds = None
     for r in range(max(rounds, 1)):
-        v = _passes(caps, holds.inner, a_up, a_dn)
-        v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
-        if r == rounds - 1 or not np.isfinite(jerk).any():
+        v = rnd.passes()
+        if r == rounds - 1 or not jerk_limited:
             break
-        up, dv_up, _ = _ramp_changes(v0, peak, v1, d_cr, rising=True)
-        dn, dv_dn, _ = _ramp_changes(v0, peak, v1, d_cr, rising=False)
-        # This round's speeds are spent: free them before the next round makes its own
-        # (1M moves: 40 MB off the profile's peak).
-        del v, v0, peak, v1, time, d_cr
-        new_up = _ramp_acceleration(up, dv_up, acc, jerk)
-        new_dn = _ramp_acceleration(dn, dv_dn, acc, jerk)
-        del up, dv_up, dn, dv_dn
+        if r == last_round:  # rounds < 1: the speeds before the accelerations' update
+            speeds = _moves(v, cap, a_up, a_dn, holds)
         # Where a move's A_eff turns back (a staircase of falling caps: small steps give a low
         # A_eff, which holds the speed under the caps, which gives one long ramp and a high
-        # A_eff, ...), take the geometric mean of the last two: the rounds then close in on
-        # the answer between the two states instead of alternating.
-        new_up, step_up = _damped(a_up, new_up, step_up)
-        new_dn, step_dn = _damped(a_dn, new_dn, step_dn)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            change = max(
-                float(np.nanmax(np.abs(new_up / a_up - 1.0), initial=0.0)),
-                float(np.nanmax(np.abs(new_dn / a_dn - 1.0), initial=0.0)),
-            )
-        a_up, a_dn = new_up, new_dn
+        # A_eff, ...), _Rounds takes the geometric mean of the last two: the rounds then close
+        # in on the answer between the two states instead of alternating.
+        change = rnd.step(v)
+        del v
         if change < JERK_CONVERGED:
-            v = _passes(caps, holds.inner, a_up, a_dn)
-            v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
+            speeds = None
+            v = rnd.passes()
             break
-    if np.isfinite(jerk).any():
-        _, dv_up, lo_up = _ramp_changes(v0, peak, v1, d_cr, rising=True)
-        _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, d_cr, rising=False)
+    del rnd  # the rounds' caches go before the speeds and times are made (1M moves: 50 MB)
+    if speeds is None:
+        speeds = _moves(v, cap, a_up, a_dn, holds)
+        del v
+    v0, peak, v1, time, d_cr = speeds
+    if jerk_limited:
+        marks = _ramp_marks(v0, peak, v1, d_cr)
+        _, dv_up, lo_up = _ramp_changes(v0, peak, v1, marks, rising=True)
+        _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, marks, rising=False)
+        del marks
         ramps = (lo_up, dv_up, lo_dn, dv_dn, acc, jerk)
     else:
         ramps = None
