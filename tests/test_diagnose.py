@@ -473,3 +473,19 @@ def test_the_reason_for_naming_nothing_quotes_the_thresholds_used():
     _, best, reason = decide([r], floor=1.0)
     assert best is None
     assert reason.endswith("is not significant over the held-out pieces (p = 0.2 > 0.01)")
+
+
+def test_an_effect_switched_on_at_its_defaults_is_no_simpler_than_one_fitted():
+    """Path compression at its default angle and length (no parameter moved) and a block
+    time fitted at 4.2 ms remove the same 37 % (48.5 -> 30.5 mm/min, p 0.002): both are one
+    decision, so the order of equals names the block time (the blind benchmark's dome at a
+    4 ms servo period was named path_compression because its fit "moved" nothing)."""
+    from core.diagnosis.diagnose import EffectResult, decide
+
+    sq = np.array([1.0, 2.0, 3.0, 4.0])
+    comp = EffectResult("path_compression", {"max_angle": 0.5}, 48.5, 30.5, 30.0, 0, 0.002, sq)
+    block = EffectResult("block_cycle_time", {"t_block": 0.0042}, 48.5, 30.5, 30.0, 1, 0.002, sq)
+    _, best, _ = decide([comp, block], floor=12.0)
+    assert best == "block_cycle_time"
+    _, best, _ = decide([block, comp], floor=12.0)
+    assert best == "block_cycle_time"

@@ -431,12 +431,14 @@ def decide(
         )
     ]
     order = {name: k for k, name in enumerate(EFFECT_PRIORITY)}
-    # an effect the machine file already calibrates (``folded``) is the less likely story
+    # an effect the machine file already calibrates (``folded``) is the less likely story;
+    # an effect that explains anything was at least switched on: one decision even where
+    # its fit left every parameter where it started (path compression at its defaults)
     best = min(
         equal,
         key=lambda r: (
             r.name in folded,
-            r.moved,
+            max(r.moved, 1),
             order.get(r.name, len(order)),
             r.held_out_gap_after,
         ),
