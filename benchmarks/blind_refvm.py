@@ -7,7 +7,9 @@ The same ten program families as ``benchmarks/blind_linuxcnc.py`` (seeded; the `
 seeds 100-999 were used while developing, the ``score`` seeds 9000-9999 only for the
 figures), run on the reference interpreter ``refvm`` (independent of core's planner: it
 imports nothing of ncperf) on the ``linuxcnc-sim`` machine as its parameters describe it
-(nothing folded in), with ONE of the interpreter's effects switched on at a random strength
+(nothing folded in, and corners blended as the paper has them, as refvm runs them -- not
+``corner_blending = "linuxcnc"``, which is LinuxCNC's planner, not the interpreter's), with
+ONE of the interpreter's effects switched on at a random strength
 (``benchmarks/withheld_effects.py``'s draws, seeded), or none (controls). Each trace is
 diagnosed on its own: ``ncperf diagnose`` with the same machine, ``--baseline profile``. A
 case whose effect leaves the trace as it was (held-out gap under VISIBLE times that of the
@@ -38,7 +40,7 @@ def cases(seeds: str, per: int) -> list[tuple[str | None, dict[str, float], str,
     rng = np.random.default_rng(base + 7)
     from core.model.machine import resolve_machine
 
-    m = dataclasses.replace(resolve_machine(MACHINE), effects=())
+    m = dataclasses.replace(resolve_machine(MACHINE), effects=(), corner_blending="paper")
     fams = list(FAMILIES)
     out: list[tuple[str | None, dict[str, float], str, int]] = []
     for k, effect in enumerate(EFFECTS):
@@ -67,7 +69,7 @@ def run(case: tuple[str | None, dict[str, float], str, int]) -> dict:
 
     nc = Ncperf()
     effects = nc.effects()
-    m = dataclasses.replace(resolve_machine(MACHINE), effects=())
+    m = dataclasses.replace(resolve_machine(MACHINE), effects=(), corner_blending="paper")
     with tempfile.TemporaryDirectory() as tmp:
         path = Path(tmp) / f"{fam}_{seed}.ngc"
         path.write_text(program(fam, seed))
