@@ -241,8 +241,9 @@ class Interpreter:
         added where it always was (the notices keep their order)."""
         self._bare_notice = self._decimal_point_args() if self.dialect == "fanuc" else None
         w = self.w
-        w.line, w.letter = w.line[:0], w.letter[:0]
-        w.value, w.bare = w.value[:0], w.bare[:0]
+        # Empty copies, not views: an empty view keeps its whole base array alive.
+        w.line, w.letter = w.line[:0].copy(), w.letter[:0].copy()
+        w.value, w.bare = w.value[:0].copy(), w.bare[:0].copy()
         del self.li
         # So do the per-line values the positions were made of, and the G-code groups but
         # the two the columns read (1M lines: another 70 MB).
