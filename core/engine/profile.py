@@ -649,12 +649,15 @@ def _ramp_changes(v0, peak, v1, d_cr, rising: bool) -> tuple[NDArray, NDArray, N
         cont = np.zeros(n, dtype=bool)
         cont[1:] = through[1:] & phase[:-1]
         # a braking chain runs forward from its first move; "cont[k]" links k-1 -> k
+    del tol  # (each temporary goes once spent: this is the profile's peak)
     start = phase & ~cont
-    cid = np.cumsum(start) - 1
+    cid = np.cumsum(start)
+    cid -= 1
     idx = np.flatnonzero(phase)
     if idx.size == 0:
         return phase, np.zeros(n), np.zeros(n)
     c = cid[idx]  # non-decreasing; every chain has its start move in ``idx``
+    del cid
     edge = c[1:] != c[:-1]
     first = idx[np.concatenate([[True], edge])]
     last = idx[np.concatenate([edge, [True]])]
@@ -747,11 +750,12 @@ def build_profile(
         v0, peak, v1, time, d_cr = _moves(v, cap, a_up, a_dn, holds)
         if r == rounds - 1 or not np.isfinite(jerk).any():
             break
+        del time  # (not this round's result: the next round makes its own)
         up, dv_up, _ = _ramp_changes(v0, peak, v1, d_cr, rising=True)
         dn, dv_dn, _ = _ramp_changes(v0, peak, v1, d_cr, rising=False)
         # This round's speeds are spent: free them before the next round makes its own
         # (1M moves: 40 MB off the profile's peak).
-        del v, v0, peak, v1, time, d_cr
+        del v, v0, peak, v1, d_cr
         new_up = _ramp_acceleration(up, dv_up, acc, jerk)
         new_dn = _ramp_acceleration(dn, dv_dn, acc, jerk)
         del up, dv_up, dn, dv_dn
