@@ -346,45 +346,48 @@ class ToolPath:
     # ------------------------------------------------------------------ arcs
     @cached_property
     def _arc(self) -> dict[str, NDArray]:
-        """The arcs' indices and senses. Their radii and pitches are the (n,) columns
-        :attr:`radius` and :attr:`pitch`; their radius vectors are recomputed where used,
-        in pieces (:meth:`_radial`): 48 bytes an arc not kept for the whole analysis."""
+        """The arcs' indices, senses, radii and pitches; their radius vectors are recomputed
+        where used, in pieces (:meth:`_radial`): 48 bytes an arc not kept for the whole
+        analysis."""
         idx = np.flatnonzero(self.is_arc)
-        return {"idx": idx, "ccw": self.kind[idx] == MoveKind.ARC_CCW}
+        radius, pitch = np.empty(idx.size), np.empty(idx.size)
+        for b in pieces(idx.size):
+            k = idx[b]
+            s, e, nrm = self.start[k], self.end[k], self.normal[k]
+            radius[b] = g.norm(g.radial(s, self.center[k], nrm))
+            pitch[b] = g.arc_pitch(s, e, nrm, self.sweep[k])
+        return {
+            "idx": idx,
+            "ccw": self.kind[idx] == MoveKind.ARC_CCW,
+            "radius": radius,
+            "pitch": pitch,
+        }
 
     def _radial(self, points: NDArray[np.float64], k: NDArray[np.int64]) -> NDArray[np.float64]:
         """In-plane vectors from the centres of arcs ``k`` to their ``points`` rows."""
         return g.radial(points[k], self.center[k], self.normal[k])
 
     @cached_property
-    def _arc_radius_pitch(self) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        radius, pitch = np.full(self.n, np.nan), np.full(self.n, np.nan)
-        idx = self._arc["idx"]
-        for b in pieces(idx.size):
-            k = idx[b]
-            s, e, nrm = self.start[k], self.end[k], self.normal[k]
-            radius[k] = g.norm(g.radial(s, self.center[k], nrm))
-            pitch[k] = g.arc_pitch(s, e, nrm, self.sweep[k])
-        return radius, pitch
-
-    @cached_property
     def radius(self) -> NDArray[np.float64]:
         """(n,) arc radius at the start (mm); NaN for lines."""
-        return self._arc_radius_pitch[0]
+        out = np.full(self.n, np.nan)
+        out[self._arc["idx"]] = self._arc["radius"]
+        return out
 
     @cached_property
     def pitch(self) -> NDArray[np.float64]:
         """(n,) helix rise per radian along the normal (mm/rad); NaN for lines."""
-        return self._arc_radius_pitch[1]
+        out = np.full(self.n, np.nan)
+        out[self._arc["idx"]] = self._arc["pitch"]
+        return out
 
     # ------------------------------------------------------------------ derived
     @cached_property
     def length(self) -> NDArray[np.float64]:
         """(n,) path length of each move, mm."""
         out = g.norm(self.end - self.start)
-        idx = self._arc["idx"]
-        if idx.size:  # (a program of lines needs no radius and pitch columns)
-            out[idx] = g.arc_length(self.radius[idx], self.sweep[idx], self.pitch[idx])
+        a = self._arc
+        out[a["idx"]] = g.arc_length(a["radius"], self.sweep[a["idx"]], a["pitch"])
         return out
 
     def _arc_tangents(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
@@ -393,7 +396,7 @@ class ToolPath:
         for b in pieces(a["idx"].size):
             k = a["idx"][b]
             out[k] = g.arc_tangent(
-                self._radial(points, k), self.normal[k], a["ccw"][b], self.pitch[k]
+                self._radial(points, k), self.normal[k], a["ccw"][b], a["pitch"][b]
             )
         return out
 
@@ -413,18 +416,16 @@ class ToolPath:
         and - for clockwise arcs about their plane normal (helices r/(r^2+c^2))."""
         out = np.zeros(self.n)
         a = self._arc
-        idx = a["idx"]
-        if idx.size:
-            k = g.arc_curvature(self.radius[idx], self.pitch[idx])
-            out[idx] = np.where(a["ccw"], k, -k)
+        k = g.arc_curvature(a["radius"], a["pitch"])
+        out[a["idx"]] = np.where(a["ccw"], k, -k)
         return out
 
     def _curvature_vector(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         out = np.zeros((self.n, 3))
-        idx = self._arc["idx"]
-        for b in pieces(idx.size):
-            k = idx[b]
-            kappa = g.arc_curvature(self.radius[k], self.pitch[k])
+        a = self._arc
+        for b in pieces(a["idx"].size):
+            k = a["idx"][b]
+            kappa = g.arc_curvature(a["radius"][b], a["pitch"][b])
             # A helix's principal normal points from the point to the axis: -r / |r|.
             out[k] = -g.unit(self._radial(points, k)) * kappa[:, None]
         return out
@@ -455,8 +456,8 @@ class ToolPath:
             idx = a["idx"][b]
             ccw = a["ccw"][b]
             n = self.normal[idx]
-            c = self.pitch[idx]
-            r = self.radius[idx]
+            c = a["pitch"][b]
+            r = a["radius"][b]
             h = np.hypot(r, c)
             t0 = g.unit(
                 np.where(ccw[:, None], 1.0, -1.0) * np.cross(n, self._radial(self.start, idx))
