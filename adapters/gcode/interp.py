@@ -22,7 +22,7 @@ from adapters.gcode.lexer import Source, Words
 from core.model import geometry as g
 from core.model.errors import InputError, Notes
 from core.model.limits import MAX_TOOL
-from core.model.pieces import piecewise
+from core.model.pieces import pieces, piecewise
 from core.model.tolerances import TOL
 from core.model.toolpath import (
     POINTS_DROPPED,
@@ -241,8 +241,9 @@ class Interpreter:
         added where it always was (the notices keep their order)."""
         self._bare_notice = self._decimal_point_args() if self.dialect == "fanuc" else None
         w = self.w
-        w.line, w.letter = w.line[:0], w.letter[:0]
-        w.value, w.bare = w.value[:0], w.bare[:0]
+        # Empty copies, not views: an empty view keeps its whole base array alive.
+        w.line, w.letter = w.line[:0].copy(), w.letter[:0].copy()
+        w.value, w.bare = w.value[:0].copy(), w.bare[:0].copy()
         del self.li
         # So do the per-line values the positions were made of, and the G-code groups but
         # the two the columns read (1M lines: another 70 MB).
@@ -807,10 +808,9 @@ class Interpreter:
             )
         else:
             normal = normals[np.searchsorted([170, 180, 190], plane)]
-        if arc_l.size == mi.size:  # every move an arc: the columns themselves, not copies
-            s, e = cols["start"], cols["end"]
-        else:
-            s, e = cols["start"][arc_l], cols["end"][arc_l]
+        # The arcs' rows of the start and end columns are read where needed, in pieces
+        # (1M arcs: no 48 MB copies of them while the sweeps are worked out).
+        start, end = cols["start"], cols["end"]
         ccw = self.kind[lines] == MoveKind.ARC_CCW
         scale = self.scale[lines]
         v, p = self.vals, self.pres
@@ -836,26 +836,33 @@ class Interpreter:
         off_in = off
         del off, off_n
         absolute = np.flatnonzero(self.arc_distance[lines] == 901)
-        centre = s + off_in  # incremental centres (G91.1, the default) ...
+        off_abs = off_in[absolute]
+        m = arc_l.size
+        for b in pieces(m):  # incremental centres (G91.1, the default), in place ...
+            off_in[b] += start[arc_l[b]]
+        centre = off_in
         if absolute.size:  # ... and absolute ones (G90.1): the offset in the start's plane
-            sa, na = s[absolute], normal[absolute]
-            centre[absolute] = off_in[absolute] + g.dot(sa, na)[:, None] * na
-        del off_in
+            sa, na = start[arc_l[absolute]], normal[absolute]
+            centre[absolute] = off_abs + g.dot(sa, na)[:, None] * na
+        del off_in, off_abs
 
         r_idx = np.flatnonzero(has_r)
         if r_idx.size:
             centre[r_idx] = self._r_centres(
-                s[r_idx],
-                e[r_idx],
+                start[arc_l[r_idx]],
+                end[arc_l[r_idx]],
                 normal[r_idx],
                 ccw[r_idx],
                 v["R"][lines[r_idx]] * scale[r_idx],
                 al[r_idx],
             )
         # Row by row, in pieces: the same numbers, bounded (m, 3) temporaries.
-        m = arc_l.size
-        r0 = piecewise(m, np.float64, lambda b: g.norm(g.radial(s[b], centre[b], normal[b])))
-        r1 = piecewise(m, np.float64, lambda b: g.norm(g.radial(e[b], centre[b], normal[b])))
+        r0 = piecewise(
+            m, np.float64, lambda b: g.norm(g.radial(start[arc_l[b]], centre[b], normal[b]))
+        )
+        r1 = piecewise(
+            m, np.float64, lambda b: g.norm(g.radial(end[arc_l[b]], centre[b], normal[b]))
+        )
         tiny = r0 < TOL.min_arc_radius
         if tiny.any():
             raise self.error(al[np.argmax(tiny)], "arc with zero radius")
@@ -880,7 +887,11 @@ class Interpreter:
                 )
             turns = np.where(pt, pv - 1, 0)
         sweep = piecewise(
-            m, np.float64, lambda b: g.arc_sweep(s[b], e[b], centre[b], normal[b], ccw[b], turns[b])
+            m,
+            np.float64,
+            lambda b: g.arc_sweep(
+                start[arc_l[b]], end[arc_l[b]], centre[b], normal[b], ccw[b], turns[b]
+            ),
         )
         cols["center"][arc_l] = centre
         cols["normal"][arc_l] = normal

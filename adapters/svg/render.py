@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.cli.output import atomic_writer
 from core.model import geometry as g
+from core.model.pieces import pieces
 from core.model.text import printable
 from core.model.tolerances import TOL
 from core.model.toolpath import MoveKind, ToolPath
@@ -287,6 +288,48 @@ def _cell_key(q: NDArray[np.int64], cell: int) -> NDArray[np.int64]:
     return key
 
 
+def _sample_arcs_into(
+    pts: NDArray[np.float64],
+    tp: ToolPath,
+    arcs: NDArray[np.int64],
+    counts: NDArray[np.int64],
+    first: NDArray[np.int64],
+    proj: NDArray[np.float64],
+) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """Projected samples of ``arcs`` (:func:`core.model.geometry.sample_arcs`, ``counts``
+    segments each) into their interior rows of ``pts`` (arc i's points start at row
+    ``first[i]``), in pieces of whole arcs of about SAMPLE_PIECE points; returns the box
+    (min, max) of all the samples, ends included."""
+    per = counts + 1
+    ends = np.cumsum(per)
+    lo, hi = np.full(2, np.inf), np.full(2, -np.inf)
+    a = 0
+    while a < per.size:
+        done = ends[a - 1] if a else 0
+        b = max(int(np.searchsorted(ends, done + g.SAMPLE_PIECE, side="right")), a + 1)
+        k = arcs[a:b]
+        samples = (
+            g.sample_arcs(
+                tp.start[k],
+                tp.center[k],
+                tp.normal[k],
+                tp.kind[k] == MoveKind.ARC_CCW,
+                tp.sweep[k],
+                tp.pitch[k],
+                counts[a:b],
+            )
+            @ proj.T
+        )
+        lo = np.minimum(lo, samples.min(axis=0))
+        hi = np.maximum(hi, samples.max(axis=0))
+        p = per[a:b]
+        local = np.arange(samples.shape[0]) - np.repeat(np.cumsum(p) - p, p)
+        inner = (local > 0) & (local < np.repeat(counts[a:b], p))
+        pts[np.repeat(first[a:b], p)[inner] + local[inner]] = samples[inner]
+        a = b
+    return lo, hi
+
+
 def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
     """Project, fit (at ``scale`` px/mm if given), sample the arcs and quantise every move."""
     proj = PROJECTIONS[view]
@@ -299,7 +342,6 @@ def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
     else:
         lo = hi = np.zeros(2)
 
-    kind = tp.kind
     arcs = np.flatnonzero(tp.is_arc)
     arc_ok = (
         np.isfinite(tp.radius[arcs])
@@ -309,7 +351,6 @@ def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
     )
     arcs = arcs[arc_ok]
     counts = np.zeros(0, dtype=np.int64)
-    samples = np.zeros((0, 2))
     if arcs.size:
         # Segment counts from the end points' box: the final box holds the arcs'
         # bulges too, so its scale is at most this one and the chord error in
@@ -320,42 +361,33 @@ def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
         total = int(counts.sum()) + arcs.size
         if total > ARC_POINT_BUDGET:
             counts = np.maximum(counts * ARC_POINT_BUDGET // total, ARC_MIN_SEGMENTS)
-        samples = (
-            g.sample_arcs(
-                tp.start[arcs],
-                tp.center[arcs],
-                tp.normal[arcs],
-                kind[arcs] == MoveKind.ARC_CCW,
-                tp.sweep[arcs],
-                tp.pitch[arcs],
-                counts,
-            )
-            @ proj.T
-        )
-        lo = np.minimum(lo, samples.min(axis=0))
-        hi = np.maximum(hi, samples.max(axis=0))
-    frame = fit_frame(lo, hi, scale)
 
     m = np.full(n, 2, dtype=np.int64)
     m[arcs] = counts + 1
     last = np.cumsum(m) - 1
     first = last - m + 1
-    pts = np.empty((int(m.sum()), 2))
+    del m
+    pts = np.empty((int(last[-1]) + 1 if n else 0, 2))
     pts[first] = uv_s
     pts[last] = uv_e
+    del uv_s, uv_e
     if arcs.size:
-        # Interior samples only: the ends come from the program, exactly.
-        per = counts + 1
-        local = np.arange(samples.shape[0]) - np.repeat(np.cumsum(per) - per, per)
-        inner = (local > 0) & (local < np.repeat(counts, per))
-        pts[np.repeat(first[arcs], per)[inner] + local[inner]] = samples[inner]
-    # (in place: the same numbers, two (m, 2) temporaries fewer)
-    px = frame.to_px(pts)
-    del pts, uv_s, uv_e, samples
-    px *= Q
-    np.rint(px, out=px)
-    q = px.astype(np.int64)
-    del px
+        # The arcs' samples straight into their rows, in pieces of whole arcs (the same
+        # numbers as all at once): interior samples only, the ends come from the program,
+        # exactly; the box holds every sample, ends included.
+        slo, shi = _sample_arcs_into(pts, tp, arcs, counts, first[arcs], proj)
+        lo = np.minimum(lo, slo)
+        hi = np.maximum(hi, shi)
+    frame = fit_frame(lo, hi, scale)
+    # Plot px, then 0.1 px as int64, in place and in pieces: the same numbers as
+    # frame.to_px, * Q, rint and astype over all points at once, with no (p, 2) copies.
+    q = pts.view(np.int64)
+    for b in pieces(pts.shape[0]):
+        px = frame.to_px(pts[b])
+        px *= Q
+        np.rint(px, out=px)
+        q[b] = px.astype(np.int64)
+    del pts
 
     breaks = np.ones(n, dtype=bool)
     if n > 1:

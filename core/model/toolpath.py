@@ -21,6 +21,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.model import geometry as g
 from core.model.errors import Notice
+from core.model.pieces import pieces
 from core.model.sampling import PathSamples
 from core.model.setup import ControllerSetup
 from core.model.tolerances import TOL
@@ -345,22 +346,26 @@ class ToolPath:
     # ------------------------------------------------------------------ arcs
     @cached_property
     def _arc(self) -> dict[str, NDArray]:
+        """The arcs' indices, senses, radii and pitches; their radius vectors are recomputed
+        where used, in pieces (:meth:`_radial`): 48 bytes an arc not kept for the whole
+        analysis."""
         idx = np.flatnonzero(self.is_arc)
-        s, e, c, nrm = self.start[idx], self.end[idx], self.center[idx], self.normal[idx]
-        sweep = self.sweep[idx]
-        ccw = self.kind[idx] == MoveKind.ARC_CCW
-        r0 = g.radial(s, c, nrm)
-        r1 = g.radial(e, c, nrm)
-        radius = g.norm(r0)
-        pitch = g.arc_pitch(s, e, nrm, sweep)
+        radius, pitch = np.empty(idx.size), np.empty(idx.size)
+        for b in pieces(idx.size):
+            k = idx[b]
+            s, e, nrm = self.start[k], self.end[k], self.normal[k]
+            radius[b] = g.norm(g.radial(s, self.center[k], nrm))
+            pitch[b] = g.arc_pitch(s, e, nrm, self.sweep[k])
         return {
             "idx": idx,
-            "r0": r0,
-            "r1": r1,
+            "ccw": self.kind[idx] == MoveKind.ARC_CCW,
             "radius": radius,
             "pitch": pitch,
-            "ccw": ccw,
         }
+
+    def _radial(self, points: NDArray[np.float64], k: NDArray[np.int64]) -> NDArray[np.float64]:
+        """In-plane vectors from the centres of arcs ``k`` to their ``points`` rows."""
+        return g.radial(points[k], self.center[k], self.normal[k])
 
     @cached_property
     def radius(self) -> NDArray[np.float64]:
@@ -385,21 +390,25 @@ class ToolPath:
         out[a["idx"]] = g.arc_length(a["radius"], self.sweep[a["idx"]], a["pitch"])
         return out
 
+    def _arc_tangents(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
+        out = g.unit(self.end - self.start)
+        a = self._arc
+        for b in pieces(a["idx"].size):
+            k = a["idx"][b]
+            out[k] = g.arc_tangent(
+                self._radial(points, k), self.normal[k], a["ccw"][b], a["pitch"][b]
+            )
+        return out
+
     @cached_property
     def tangent_start(self) -> NDArray[np.float64]:
         """(n, 3) unit tangent at the start of each move."""
-        out = g.unit(self.end - self.start)
-        a = self._arc
-        out[a["idx"]] = g.arc_tangent(a["r0"], self.normal[a["idx"]], a["ccw"], a["pitch"])
-        return out
+        return self._arc_tangents(self.start)
 
     @cached_property
     def tangent_end(self) -> NDArray[np.float64]:
         """(n, 3) unit tangent at the end of each move."""
-        out = g.unit(self.end - self.start)
-        a = self._arc
-        out[a["idx"]] = g.arc_tangent(a["r1"], self.normal[a["idx"]], a["ccw"], a["pitch"])
-        return out
+        return self._arc_tangents(self.end)
 
     @cached_property
     def curvature(self) -> NDArray[np.float64]:
@@ -411,23 +420,25 @@ class ToolPath:
         out[a["idx"]] = np.where(a["ccw"], k, -k)
         return out
 
-    def _curvature_vector(self, rkey: str) -> NDArray[np.float64]:
+    def _curvature_vector(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         out = np.zeros((self.n, 3))
         a = self._arc
-        k = g.arc_curvature(a["radius"], a["pitch"])
-        # A helix's principal normal points from the point to the axis: -r / |r|.
-        out[a["idx"]] = -g.unit(a[rkey]) * k[:, None]
+        for b in pieces(a["idx"].size):
+            k = a["idx"][b]
+            kappa = g.arc_curvature(a["radius"][b], a["pitch"][b])
+            # A helix's principal normal points from the point to the axis: -r / |r|.
+            out[k] = -g.unit(self._radial(points, k)) * kappa[:, None]
         return out
 
     @cached_property
     def curvature_vector_start(self) -> NDArray[np.float64]:
         """(n, 3) curvature vector (kappa times principal normal) at each move's start, 1/mm."""
-        return self._curvature_vector("r0")
+        return self._curvature_vector(self.start)
 
     @cached_property
     def curvature_vector_end(self) -> NDArray[np.float64]:
         """(n, 3) curvature vector at each move's end, 1/mm."""
-        return self._curvature_vector("r1")
+        return self._curvature_vector(self.end)
 
     @cached_property
     def axis_share(self) -> NDArray[np.float64]:
@@ -441,14 +452,17 @@ class ToolPath:
         """
         share = np.abs(self.tangent_start)
         a = self._arc
-        if a["idx"].size:
-            idx = a["idx"]
+        for b in pieces(a["idx"].size):
+            idx = a["idx"][b]
+            ccw = a["ccw"][b]
             n = self.normal[idx]
-            c = a["pitch"]
-            r = a["radius"]
+            c = a["pitch"][b]
+            r = a["radius"][b]
             h = np.hypot(r, c)
-            t0 = g.unit(np.where(a["ccw"][:, None], 1.0, -1.0) * np.cross(n, a["r0"]))
-            turned = np.where(a["ccw"][:, None], np.cross(n, t0), -np.cross(n, t0))  # +90 deg
+            t0 = g.unit(
+                np.where(ccw[:, None], 1.0, -1.0) * np.cross(n, self._radial(self.start, idx))
+            )
+            turned = np.where(ccw[:, None], np.cross(n, t0), -np.cross(n, t0))  # +90 deg
             inplane = g.max_share(t0, turned, self.sweep[idx][:, None]) * (r / h)[:, None]
             share[idx] = np.minimum(inplane + np.abs(n * (c / h)[:, None]), 1.0)
         return share
