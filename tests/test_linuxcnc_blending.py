@@ -170,3 +170,22 @@ def test_a_short_rest_is_run_as_part_of_the_next_arc(nc):
     assert pr.hold_start[1] == pytest.approx(0.075957, rel=1e-4)
     assert pr.hold_end[1] == pytest.approx(0.2 - 0.075957, rel=1e-4)
     assert pr.v_peak[1] == pytest.approx(23.811, rel=1e-4)
+
+
+def test_an_arc_the_neighbours_keep_below_its_limit_changes_speed_along_it(nc):
+    """Two 0.3 mm lines 20 degrees apart, from rest to rest, F 100: the tolerance allows
+    d = sin10 0.01 / (1 - cos10) = 0.114301 mm (under 0.15), R = d / tan10 = 0.648236 mm,
+    sqrt(2000 R) = 36.01 mm/s < F: the arc binds. But from rest the first line reaches only
+    sqrt(2 2000 (0.3 - d)) = 27.25 mm/s before it: the neighbours keep the arc below its
+    limit, so LinuxCNC changes speed along it, at half of 2000: 0.3 - d at 2000 and d at
+    1000 give sqrt(2 2000 (0.3 - d) + 2 1000 d) = 31.17 mm/s at the corner (the second line,
+    20 degrees off X, brakes at 2000 / cos20 = 2128.4: 31.92 from its end). The rest after
+    the arc (0.186 mm) is longer than 4 servo periods at 36 mm/s (0.144 mm): not merged."""
+    b = math.radians(20)
+    tp = path([{"end": (0.3, 0, 0)}, {"end": (0.3 + 0.3 * math.cos(b), 0.3 * math.sin(b), 0)}])
+    d = 0.01 * math.sin(math.radians(10)) / (1 - math.cos(math.radians(10)))
+    pr = nc.predict(tp, Setup(machine=lcnc(), ramps=True)).profile
+    assert pr.v_exit[0] == pytest.approx(math.sqrt(4000 * (0.3 - d) + 2000 * d), rel=1e-4)
+    assert pr.v_exit[0] == pytest.approx(31.17, abs=0.01)
+    held = nc.predict(tp, Setup(machine=lcnc("paper"), ramps=True)).profile
+    assert held.v_exit[0] < 27.3

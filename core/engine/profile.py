@@ -949,6 +949,61 @@ class _Rounds:
         return change
 
 
+def _blend_holds(
+    ev: Evaluation,
+    cap: NDArray,
+    caps: NDArray,
+    acc: NDArray,
+    a_blend: NDArray | None,
+    h_start: NDArray,
+    h_end: NDArray,
+    r_end: NDArray,
+) -> tuple[NDArray, NDArray, NDArray]:
+    """The holds of a planner that changes speed along its blend arcs at ``a_blend`` (None:
+    held, as the paper has it), with the rests it runs as part of the next arc
+    (``Evaluation.blend_rest``).
+
+    Along an arc the speed may change at a_blend instead of the move's acceleration: the
+    ramps get the same reach (a (L - holds) + a_blend holds) when the holds they skip shrink
+    by 1 - a_blend / a. An arc that is the slowest point around (its speed limit binds and
+    the speeds on both sides reach it) is run at that speed, held, as the paper has it; one
+    the neighbours keep below its limit is not, so a first pass with those arcs held tells
+    which they are. A rest run as part of an arc is the arc's, straight (ratio 1), held or
+    not with it.
+    """
+    tp = ev.toolpath
+    keep = np.ones(tp.n)
+    j = ev.junction
+    if a_blend is not None:
+        with np.errstate(divide="ignore", invalid="ignore"):
+            keep = np.clip(np.nan_to_num(1.0 - a_blend / acc, nan=0.0), 0.0, 1.0)
+    merged = np.zeros(tp.n) if ev.blend_rest is None else ev.blend_rest
+
+    def holds(free: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+        hs, he, re = h_start.copy(), h_end.copy(), r_end.copy()
+        he[j[free]] *= keep[j[free]]
+        hs[j[free] + 1] *= keep[j[free] + 1]
+        # a rest belongs to the arc at its move's end (junction k for move k): it changes
+        # speed where that arc does, and is held with it where the arc is held
+        scale = np.ones(tp.n)
+        scale[j[free]] = keep[j[free]]
+        rest = merged * scale
+        k = np.flatnonzero(rest > 0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            ratio = (re[k] * he[k] + rest[k]) / (he[k] + rest[k])
+        re[k] = np.where(he[k] + rest[k] > 0, ratio, re[k])
+        he[k] += rest[k]
+        return hs, he, re
+
+    binds = ev.junction_feed < np.minimum(cap[j], cap[j + 1]) * (1.0 - TOL.rel_equal)
+    if a_blend is None or not binds.any():
+        return holds(~binds if a_blend is not None else np.zeros(j.size, dtype=bool))
+    hs, he, _ = holds(~binds)
+    v = _passes(caps, np.maximum(tp.length - hs - he, 0.0), acc, acc)
+    below = v[j + 1] < ev.junction_feed * (1.0 - TOL.rel_equal)
+    return holds(~binds | below)
+
+
 def build_profile(
     ev: Evaluation,
     *,
@@ -1003,25 +1058,12 @@ def build_profile(
     b = boundary_caps(ev, cap, pause)
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
-    if ev.blend_rest is not None:
-        # a rest run as part of the arc at the move's end is the arc's, straight (ratio 1)
-        k = np.flatnonzero(ev.blend_rest > 0)
-        rest = ev.blend_rest[k]
-        r_end[k] = (r_end[k] * h_end[k] + rest) / (h_end[k] + rest)
-        h_end[k] += rest
-    if along_blends > 0.0:
-        # Along a blend arc whose speed limit is above the moves' (the arc does not bind),
-        # the speed changes at a_blend instead of the move's acceleration: the ramps get the
-        # same reach (a (L - holds) + a_blend holds) when the holds they skip shrink by
-        # 1 - a_blend / a. A binding arc is run at its speed, held as the paper has it.
-        with np.errstate(divide="ignore", invalid="ignore"):
-            keep = np.clip(np.nan_to_num(1.0 - a_blend / acc, nan=0.0), 0.0, 1.0)
-        j = ev.junction
-        free = ~(ev.junction_feed < np.minimum(cap[j], cap[j + 1]) * (1.0 - TOL.rel_equal))
-        h_end[j[free]] *= keep[j[free]]
-        h_start[j[free] + 1] *= keep[j[free] + 1]
-    holds = _Holds(length, h_start, h_end, r_start, r_end)
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
+    if along_blends > 0.0 or ev.blend_rest is not None:
+        h_start, h_end, r_end = _blend_holds(
+            ev, cap, caps, acc, a_blend if along_blends > 0.0 else None, h_start, h_end, r_end
+        )
+    holds = _Holds(length, h_start, h_end, r_start, r_end)
     jerk_limited = bool(np.isfinite(jerk).any())
     # The rounds change the accelerations only (see _Rounds); the last one (the rounds' end,
     # or the first whose change is below JERK_CONVERGED) makes the speeds and times.
