@@ -62,6 +62,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
+from core.engine.indicators import LCNC_KINK_RATIO, LCNC_MIN_SEGMENT_CYCLES, LCNC_TANGENTIAL_RATIO
 from core.model import geometry as g
 
 NAME = "tangential"
@@ -166,14 +167,6 @@ def corner_feed(
     cand = np.nan_to_num(np.concatenate([v_feed, v_acc, v_jerk], axis=1), nan=0.0, posinf=inf)
     limit = np.argmin(cand, axis=1)
     return cand[np.arange(cand.shape[0]), limit], limit
-
-
-#: LinuxCNC 2.9 (tp_types.h, blendmath.h, the ini default ARC_BLEND_KINK_RATIO): a segment
-#: lasts at least 1.02 servo periods; the tangent-kink threshold; the share of the plane's
-#: acceleration along a blend arc.
-LCNC_MIN_SEGMENT_CYCLES = 1.02
-LCNC_KINK_RATIO = 0.1
-LCNC_TANGENTIAL_RATIO = 0.5
 
 
 def plane_acceleration(

@@ -122,6 +122,15 @@ def _nearest(
     return k, np.sqrt(d2[np.arange(q.shape[0]), k])
 
 
+def _run_on(q: NDArray, start: float) -> tuple[NDArray, NDArray]:
+    """The steps between samples ``q`` (m, 3), and where the samples would be along the path
+    if they ran on from arc length ``start`` by their own travel: ties between equally near
+    points are broken by it, which tells apart two passes over the same points (a plunge
+    down its retract)."""
+    step = np.linalg.norm(np.diff(q, axis=0), axis=1)
+    return step, start + np.concatenate([[0.0], np.cumsum(step)])
+
+
 def _project(
     tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples
 ) -> tuple[NDArray, NDArray]:
@@ -155,11 +164,9 @@ def _project(
             win = np.flatnonzero(
                 ((owner >= a - 1) & (owner <= b + 1)) | ((s_p >= s_a - LAG_BACK) & (owner <= b))
             )
-            # Where the samples should be if they run on along the line's moves from its
-            # start: tells apart two passes of one line over the same points (a drilling
-            # cycle's feed down and rapid back up its own hole).
-            travel = np.linalg.norm(np.diff(q[sel], axis=0), axis=1)
-            s_exp = s_a + np.concatenate([[0.0], np.cumsum(travel)])
+            # (on from the line's start: a drilling cycle's feed down and rapid back up its
+            # own hole are one line)
+            _, s_exp = _run_on(q[sel], s_a)
             for c in range(0, sel.size, 2048):
                 part = sel[c : c + 2048]
                 e = s_exp[c : c + 2048]
@@ -180,16 +187,12 @@ def _project(
         s_last = s[rest[0] - 1] if rest[0] > 0 else 0.0
         for c in range(0, rest.size, CHUNK):
             part = rest[c : c + CHUNK]
+            step, s_exp = _run_on(q[part], s_last)
             # The chunk cannot run further along the path than its samples travel.
-            travel = float(np.linalg.norm(np.diff(q[part], axis=0), axis=1).sum())
-            span = 2.0 * travel + AHEAD_MARGIN
+            span = 2.0 * float(step.sum()) + AHEAD_MARGIN
             win = np.flatnonzero((s_p >= s_last - AHEAD_MARGIN) & (s_p <= s_last + span))
             if win.size == 0:
                 win = np.arange(s_p.size)
-            # Where the samples should be if they run on along the path (to tell apart two
-            # passes over the same points, a plunge down its retract).
-            step = np.linalg.norm(np.diff(q[part], axis=0), axis=1)
-            s_exp = s_last + np.concatenate([[0.0], np.cumsum(step)])
             k, dd = _nearest(q[part], pts[win], s_p[win], s_exp)
             s[part] = s_p[win[k]]
             dist[part] = dd

@@ -200,10 +200,18 @@ class Evaluation:
 BLEND_INDICATOR = "ncu_capacity"
 BLEND_LABEL = "block time (blend arc)"
 REST_LABEL = "block time (rest between blend arcs)"
-#: LinuxCNC 2.9: a line whose rest between arcs would last under ARC_BLEND_GAP_CYCLES = 4
-#: servo periods (at the next arc's speed) is run as part of that arc (blendmath.c
-#: blendCheckConsume); a servo period is the block time over TP_MIN_SEGMENT_CYCLES = 1.02.
-LCNC_GAP_BLOCKS = 4.0 / 1.02
+#: LinuxCNC 2.9's planner (``corner_blending = "linuxcnc"``; tp_types.h, blendmath.h and the
+#: ini defaults), in one place for the plugins and the profile: a segment lasts at least
+#: TP_MIN_SEGMENT_CYCLES servo periods (a servo period is the block time over it); a line
+#: whose rest between arcs would last under ARC_BLEND_GAP_CYCLES servo periods (at the next
+#: arc's speed) is run as part of that arc (blendmath.c blendCheckConsume); the
+#: tangent-kink threshold ARC_BLEND_KINK_RATIO; the share of the plane's acceleration along
+#: a blend arc, BLEND_ACC_RATIO_TANGENTIAL.
+LCNC_MIN_SEGMENT_CYCLES = 1.02
+LCNC_GAP_CYCLES = 4
+LCNC_KINK_RATIO = 0.1
+LCNC_TANGENTIAL_RATIO = 0.5
+LCNC_GAP_BLOCKS = LCNC_GAP_CYCLES / LCNC_MIN_SEGMENT_CYCLES
 
 
 def _blend_block_time(

@@ -54,7 +54,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
-from core.engine.indicators import Evaluation
+from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
 from core.model.pieces import pieces
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
@@ -483,7 +483,7 @@ def boundary_caps(
 #: machine's ``corner_blending``: the paper's speed is constant over the arc (sec. 2.1);
 #: LinuxCNC 2.9 changes speed along its blend arcs at half the acceleration of their plane
 #: (blendmath.h BLEND_ACC_RATIO_TANGENTIAL).
-BLEND_ACCELERATION = {"paper": 0.0, "linuxcnc": 0.5}
+BLEND_ACCELERATION = {"paper": 0.0, "linuxcnc": LCNC_TANGENTIAL_RATIO}
 
 
 def _holds(ev: Evaluation) -> tuple[NDArray, NDArray, NDArray, NDArray]:
@@ -997,7 +997,7 @@ def _blend_holds(
 
     binds = ev.junction_feed < np.minimum(cap[j], cap[j + 1]) * (1.0 - TOL.rel_equal)
     if a_blend is None or not binds.any():
-        return holds(~binds if a_blend is not None else np.zeros(j.size, dtype=bool))
+        return holds(~binds)  # (without a_blend nothing is scaled: keep is 1)
     hs, he, _ = holds(~binds)
     v = _passes(caps, np.maximum(tp.length - hs - he, 0.0), acc, acc)
     below = v[j + 1] < ev.junction_feed * (1.0 - TOL.rel_equal)
