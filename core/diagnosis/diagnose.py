@@ -18,7 +18,8 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    significantly (a sign-flip test over pieces of the held-out stretches, p <= SIG_P), by more than
    the noise floor (the machine file's, from ``ncperf calibrate``, else estimated from the
    trace, and never under MIN_FEED_SHARE of F) and by at least BEST_SHARE of the gap. Among
-   the effects that clear it, those not significantly worse than the best are equally good:
+   the effects that clear it, those not significantly worse than the best, or leaving a gap
+   within TIE_SHARE of its gap, are equally good:
    the one with the fewest parameters the data moved is named, then the first in
    EFFECT_PRIORITY. "None" is an answer: the model already explains the trace, or what is
    left is noise or an effect not in the list. Effects are then added greedily while each
@@ -420,7 +421,9 @@ def decide(
             )
         return ranked, None, f"none: the best fit, {lead.name}, " + " and ".join(why)
     lead = ok[0]
-    margin = TIE_SHARE * (lead.held_out_gap_before - lead.held_out_gap_after)
+    # equal: remaining gaps within TIE_SHARE of the best's remaining gap (a share of what
+    # it removed would make a 30 % larger residual "equal" wherever the gap was large)
+    margin = TIE_SHARE * lead.held_out_gap_after
     equal = [
         r
         for r in ok

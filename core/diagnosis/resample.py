@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 from core.diagnosis.align import Alignment
 from core.diagnosis.rules import (
     CHUNKS,
+    COARSE_SAMPLING,
     GAP_PERIODS,
     MAX_POINTS,
     PER_MIN,
@@ -51,6 +52,9 @@ class Data:
     #: the piece of the run each grid point is in (CHUNKS stretches of PIECES pieces; the
     #: held-out pieces are the samples of the decision rule's significance test)
     chunk: NDArray[np.int64] | None = None
+    #: the noise of the measured feed (mm/s RMS) from its samples in time (NaN: samples too
+    #: coarse or irregular for that; :func:`trace_noise` then falls back on the path grid)
+    noise: float = math.nan
 
 
 def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
@@ -85,7 +89,44 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
         label=label,
         weight=weight,
         case=case,
+        noise=sample_noise(tp, al),
     )
+
+
+def _robust_d2_rms(d2: NDArray[np.float64]) -> float:
+    """The RMS of white noise whose second differences are ``d2``, robustly: 1.4826 x the
+    median absolute second difference / sqrt(6) (a second difference of white noise of RMS
+    sigma has RMS sqrt(6) sigma; ramps, whose second difference is zero, and the few places
+    where a ramp begins or ends, add nothing to the median)."""
+    return float(1.4826 * np.median(np.abs(d2)) / math.sqrt(6.0))
+
+
+def sample_noise(tp: ToolPath, al: Alignment) -> float:
+    """The noise of the measured feed (mm/s RMS) from consecutive samples in time on feed
+    moves, or NaN where the samples are coarser than COARSE_SAMPLING, event-based ("line and
+    feed": values hold between events) or too few.
+
+    In time, a controller's motion is ramps of constant acceleration, whose second difference
+    vanishes except where one starts or ends -- a few samples of every corner or stop at
+    millisecond sampling. On the path grid the same motion is not: approaching a stop v
+    follows sqrt(2 a s), whose second difference grows without bound, so a program of stops
+    every half millimetre (exact stop on chords) looked like noise of 1000 mm/min there."""
+    if al.method == "line and feed" or al.t.size < 3:
+        return math.nan
+    dt = np.diff(al.t)
+    period = float(np.median(dt))
+    if not period > 0 or period > COARSE_SAMPLING:
+        return math.nan
+    feed = tp.is_feed[tp.move_at(al.s)]
+    # triples of samples on feed moves, evenly spaced in time (no hole between them)
+    even = np.abs(dt - period) <= 0.5 * period
+    ok = feed[2:] & feed[1:-1] & feed[:-2] & even[1:] & even[:-1]
+    v = al.v
+    d2 = (v[2:] - 2.0 * v[1:-1] + v[:-2])[ok]
+    d2 = d2[np.isfinite(d2)]
+    if d2.size < 3:
+        return math.nan
+    return _robust_d2_rms(d2)
 
 
 def split(data: Sequence[Data]) -> tuple[list[Data], str]:
@@ -177,11 +218,13 @@ def feed_level(data: Sequence[Data]) -> float:
 
 
 def trace_noise(data: Sequence[Data]) -> float:
-    """The noise of the measured feed itself (mm/min RMS), from the second differences along
-    the path, robustly (1.4826 x median absolute value / sqrt(6): white noise of that RMS
-    gives it; ramps, whose second difference is zero, and the few corners, add nothing):
-    the noise floor of a machine whose file gives none."""
-    d2 = [np.abs(np.diff(d.v[~d.calibration], 2)) for d in data if (~d.calibration).sum() > 2]
+    """The noise of the measured feed itself (mm/min RMS): the noise floor of a machine whose
+    file gives none. From the samples in time (:func:`sample_noise`; the median over the
+    traces) where every trace has it, else from the second differences along the path grid
+    of the held-out points (coarse or event-based recordings)."""
+    if data and all(math.isfinite(d.noise) for d in data):
+        return float(np.median([d.noise for d in data])) * PER_MIN
+    d2 = [np.diff(d.v[~d.calibration], 2) for d in data if (~d.calibration).sum() > 2]
     if not d2:
         return 0.0
-    return float(1.4826 * np.median(np.concatenate(d2)) / math.sqrt(6.0)) * PER_MIN
+    return _robust_d2_rms(np.concatenate(d2)) * PER_MIN
