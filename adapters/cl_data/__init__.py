@@ -19,8 +19,6 @@ import os
 import re
 from pathlib import Path
 
-from adapters.cl_data.interp import interpret
-from adapters.cl_data.source import scan_gotos
 from adapters.source import GCODE_EXTENSIONS, Source, check_bytes  # G-code: never claimed
 from core import InputError, ToolPath, hookimpl
 from core.model.inputs import read_input
@@ -53,6 +51,10 @@ def read_cl(data: bytes, name: str) -> ToolPath:
         ending each move, one operation per TOOL PATH (else per tool load),
         ``tool_axis`` when GOTO records carry i,j,k.
     """
+    # The reader is imported when a CL file is read: a G-code run does not load it.
+    from adapters.cl_data.interp import interpret
+    from adapters.cl_data.source import scan_gotos
+
     src = Source(name, data)
     check_bytes(src, "CL data", "CL data")
     return interpret(src, scan_gotos(src))

@@ -21,11 +21,9 @@ import os
 import re
 from pathlib import Path
 
-from adapters.gcode.control import MachineSetup
 from adapters.gcode.interp import NeedsInterpreter, detect_dialect, detect_dialect_text, interpret
 from adapters.gcode.lexer import Source, tokenize
-from adapters.gcode.run import run_program
-from adapters.gcode.setup import machine_setup
+from adapters.gcode.setup import MachineSetup, machine_setup
 from adapters.gcode.words import DIALECTS
 from adapters.source import GCODE_EXTENSIONS
 from core import ExtractOptions, InputError, ToolPath, UsageError, hookimpl
@@ -82,6 +80,10 @@ def read_gcode(
         )
     except (InputError, NeedsInterpreter):
         pass
+    # The full interpreter is imported when a program needs it (its modules are a third of
+    # the adapter's start-up).
+    from adapters.gcode.run import run_program
+
     d = dialect or detect_dialect_text(name, data)
     return run_program(name, data, d, block_delete, setup)
 

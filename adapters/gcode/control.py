@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Callable
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -28,14 +28,13 @@ import numpy as np
 from adapters.gcode import words as W
 from adapters.gcode.comp import Compensator
 from adapters.gcode.interp import State
+from adapters.gcode.setup import ORIGIN, MachineSetup, Vec
 from core.model.errors import Notes
 from core.model.limits import MAX_PECKS, MAX_TOOL
 from core.model.tolerances import TOL
 from core.model.toolpath import PathMode
 
 INCH = 25.4
-Vec = tuple[float, float, float]
-ORIGIN: Vec = (0.0, 0.0, 0.0)
 #: Plane -> (first axis, second axis, normal axis) indices; and the normal vector.
 PLANES = {170: (0, 1, 2), 180: (2, 0, 1), 190: (1, 2, 0)}
 NORMALS = {170: (0.0, 0.0, 1.0), 180: (0.0, 1.0, 0.0), 190: (1.0, 0.0, 0.0)}
@@ -57,43 +56,6 @@ EXTERNAL_OFFSET = 0
 
 class ControlError(Exception):
     """An error of the current block (the runner adds file, line and text)."""
-
-
-@dataclass
-class MachineSetup:
-    """What the machine file says about the controller's state before the program runs.
-
-    Attributes
-    ----------
-    home, home2 : (3,) mm
-        G28 and G30 positions in machine coordinates (LinuxCNC's default parameter file
-        has both at machine zero).
-    offsets : dict code -> (3,) mm
-        Work offsets (G54 = 540 ... G59.3 = 593, Siemens G505-G599) in machine coordinates.
-    tool_radius : dict tool -> mm
-        Tool radii for cutter compensation (LinuxCNC tool table, machine TOML [tools]).
-    tool_length : dict tool -> mm
-        Tool lengths for G43 (added to Z).
-    default_path_mode : str or None
-        "exact_stop" or "continuous": what the controller does where the program sets no
-        path mode (None: the dialect's default).
-    tool_radius_override : float or None
-        --tool-radius: the radius of every tool for cutter compensation.
-    search : tuple of str
-        Folders for subprogram files after the program's own.
-    peck_clearance : float or None
-        mm above the last peck that G73/G83 come back to (None: LinuxCNC's 0.254 mm).
-    """
-
-    home: Vec = ORIGIN
-    home2: Vec = ORIGIN
-    offsets: dict[int, Vec] = field(default_factory=dict)
-    tool_radius: dict[int, float] = field(default_factory=dict)
-    tool_length: dict[int, float] = field(default_factory=dict)
-    default_path_mode: str | None = None
-    tool_radius_override: float | None = None
-    search: tuple[str, ...] = ()
-    peck_clearance: float | None = None
 
 
 @dataclass(slots=True)

@@ -136,6 +136,16 @@ def _ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> 
     return np.where(idx >= 0, out, initial)
 
 
+def _line_index(line: NDArray[np.int64]) -> tuple[NDArray[np.int64], NDArray[np.intp]]:
+    """``np.unique(line, return_inverse=True)`` of the words' lines, which are sorted (the
+    lexer's order): the lines that carry words and each word's index among them, without
+    the sort (1M lines: 0.1 s)."""
+    first = np.empty(line.size, dtype=bool)  # the word starts its line's words
+    first[:1] = True
+    np.not_equal(line[1:], line[:-1], out=first[1:])
+    return line[first], np.cumsum(first, dtype=np.intp) - 1
+
+
 @dataclasses.dataclass
 class State:
     """The modal state at the start or end of a run of plain lines (G-codes x 10).
@@ -225,7 +235,7 @@ class Interpreter:
         self._prefilter()
         if w.line.size == 0:
             raise _no_moves(self.src)
-        self.al, self.li = np.unique(w.line, return_inverse=True)
+        self.al, self.li = _line_index(w.line)
         self.na = self.al.size
         self._gcodes()
         self._mcodes()
@@ -263,7 +273,7 @@ class Interpreter:
         self._prefilter()
         if w.line.size == 0:
             return None, init
-        self.al, self.li = np.unique(w.line, return_inverse=True)
+        self.al, self.li = _line_index(w.line)
         self.na = self.al.size
         self._gcodes()
         self._mcodes()
@@ -540,16 +550,18 @@ class Interpreter:
         absolute = (self.distance == 900) | machine
         pos = np.zeros((self.na, 3))
         known = np.zeros((self.na, 3), dtype=bool)
+        lines = np.arange(self.na)
         for axis, ch in enumerate(AXIS_LETTERS):
             gvn = given[ch]
             mm = np.where(gvn, vals[ch], 0.0) * self.scale
             abs_set = gvn & absolute
             inc = np.where(gvn & ~absolute, mm, 0.0)
             csum = np.cumsum(inc)
-            last = np.where(abs_set, np.arange(self.na), -1)
+            last = np.where(abs_set, lines, -1)
             np.maximum.accumulate(last, out=last)
             before = 0.0 if self.initial is None else self.initial.pos[axis]
-            base = np.where(last >= 0, mm[np.maximum(last, 0)] - csum[np.maximum(last, 0)], before)
+            mm -= csum  # (the same differences as taken at the last absolute line)
+            base = np.where(last >= 0, mm[np.maximum(last, 0)], before)
             pos[:, axis] = base + csum
             known[:, axis] = np.maximum.accumulate(gvn)
             if self.initial is not None and self.initial.known[axis]:

@@ -1,7 +1,8 @@
 """G-code text -> words (letter, number, line), vectorised over the whole file.
 
 Plain lines -- letters, numbers, spaces and balanced ``( )`` comments, the
-bulk of any CAM program -- are tokenised with numpy over the file's bytes.
+bulk of any CAM program -- are tokenised over the whole file at once:
+``bytes.translate`` and numpy on its bytes, one C parse of all the numbers.
 Lines with anything else (``;`` comments, ``%``, block delete ``/``,
 keywords, ``=``, ``#``, non-ASCII text...) are few; they go through a
 per-line Python tokeniser that knows the rare syntax and names the line in
@@ -22,21 +23,10 @@ from adapters.source import Source, check_bytes
 
 SPACE, TAB, CR, LF, VT, FF = 32, 9, 13, 10, 11, 12
 
-# Byte classes for the vectorised path.
-_PLAIN = np.zeros(256, dtype=bool)
-for _ch in b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789.+- \t\r()":
-    _PLAIN[_ch] = True
-_PLAIN[VT] = _PLAIN[FF] = True
-# Upper-case letters; whitespace to 0 (dropped), everything else unchanged.
-_CANON = np.arange(256, dtype=np.uint8)
-_CANON[ord("a") : ord("z") + 1] -= 32
-for _ch in (SPACE, TAB, CR, VT, FF):
-    _CANON[_ch] = 0
+#: Bytes a plain line may hold (besides its newline).
+_PLAIN_BYTES = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789.+- \t\r()\x0b\x0c"
 _LETTER = np.zeros(256, dtype=bool)
 _LETTER[ord("A") : ord("Z") + 1] = True
-_NUMCHAR = np.zeros(256, dtype=bool)
-for _ch in b"0123456789.+-":
-    _NUMCHAR[_ch] = True
 
 
 @dataclass
@@ -74,105 +64,115 @@ class Words:
 
 
 # ----------------------------------------------------------------------- vectorised path
-def _special_lines_from_bytes(src: Source) -> NDArray[np.bool_]:
-    """Lines the vectorised path cannot take: unusual bytes or unbalanced/nested parentheses."""
-    buf = src.buf
-    special = np.zeros(src.n_lines, dtype=bool)
-    odd = np.flatnonzero(~_PLAIN[buf] & (buf != LF))
+# The whole-file passes are bytes.translate (one C loop over the bytes, a table per byte)
+# where they can be: several times faster than numpy's table look-ups and comparisons.
+
+#: 1 at a byte the vectorised path does not take (a line with one goes to the per-line
+#: path, wherever it is, comments included), else 0.
+_ODD = bytes(0 if ch in _PLAIN_BYTES or ch == LF else 1 for ch in range(256))
+#: Lower-case letters to upper case (the whitespace in _WHITESPACE is deleted with it).
+_UPPER = bytes.maketrans(b"abcdefghijklmnopqrstuvwxyz", b"ABCDEFGHIJKLMNOPQRSTUVWXYZ")
+_WHITESPACE = bytes([SPACE, TAB, CR, VT, FF])
+#: After _UPPER: 1 at the breaks between words (letters, newlines), else 0.
+_BREAK = bytes(1 if _LETTER[ch] or ch == LF else 0 for ch in range(256))
+#: After _UPPER: letters and newlines to spaces, leaving the numbers space separated.
+_NUMBERS = bytes(SPACE if _BREAK[ch] else ch for ch in range(256))
+#: A ( ) comment closed on its line, with no parenthesis inside.
+_COMMENT = re.compile(rb"\([^()\n]*\)")
+
+
+def _lines_of(lf: NDArray[np.int64], pos: NDArray[np.int64]) -> NDArray[np.int64]:
+    """0-based lines of the byte offsets ``pos`` in a text whose newlines are at ``lf``."""
+    return np.searchsorted(lf, pos, side="left")
+
+
+def _plain_text(src: Source, special: NDArray[np.bool_]) -> bytes:
+    """The plain lines' words without spaces, comments and case: letters (upper case),
+    number characters and one newline per line of the file (a special line keeps only its
+    newline, so a word's line is the count of newlines before it). Marks ``special`` the
+    lines the vectorised path cannot take: one with a byte it does not take, or with
+    parentheses that are not ( ) comments one after the other (unclosed, nested, a ")"
+    first)."""
+    odd = np.flatnonzero(np.frombuffer(src.data.translate(_ODD), dtype=bool))
     if odd.size:
-        special[np.unique(np.searchsorted(src.nl, odd, side="left"))] = True
-    return special
-
-
-def _comment_mask(src: Source, special: NDArray[np.bool_]) -> NDArray[np.bool_] | None:
-    """Bytes inside ( ) comments on plain lines; marks lines with bad parentheses special."""
-    buf = src.buf
-    opens = buf == ord("(")
-    closes = buf == ord(")")
-    paren_pos = np.flatnonzero(opens | closes)
-    if paren_pos.size == 0:
-        return None
-    delta = opens.astype(np.int8) - closes.astype(np.int8)
-    paren_line = np.searchsorted(src.nl, paren_pos, side="left")
-    # Lines whose parentheses do not balance go to the per-line path.
-    net = np.bincount(paren_line, weights=delta[paren_pos], minlength=src.n_lines)
-    special |= net != 0
-    delta[paren_pos[special[paren_line]]] = 0
-    # Now every remaining line starts at depth 0, so depth is the depth within the line.
-    depth = np.cumsum(delta, dtype=np.int32)
-    d = depth[paren_pos]
-    # Nested "((" or a ")" before its "(": the depth leaves {0, 1}.
-    bad = ((d > 1) | (d < 0)) & ~special[paren_line]
-    if bad.any():
-        special[np.unique(paren_line[bad])] = True
-        delta[paren_pos[special[paren_line]]] = 0
-        depth = np.cumsum(delta, dtype=np.int32)
-    return (depth > 0) | closes
-
-
-def _line_ranges(
-    lfpos: NDArray[np.int64], size: int, lines: NDArray[np.int64]
-) -> list[tuple[int, int]]:
-    """[start, end) of the given lines in a buffer whose newlines are at ``lfpos``."""
-    out = []
-    for k in lines:
-        a = int(lfpos[k - 1]) + 1 if k > 0 else 0
-        b = int(lfpos[k]) if k < lfpos.size else size
-        out.append((a, b))
-    return out
+        special[np.unique(_lines_of(src.nl, odd))] = True
+    del odd
+    text = src.data.translate(_UPPER, _WHITESPACE)  # a newline stays where it was, in lines
+    lf: NDArray[np.int64] | None = None
+    if b"(" in text or b")" in text:
+        # Every well-formed comment goes; a parenthesis left over marks its line. (A line
+        # whose parentheses alternate "(...)(...)" loses them all; one that nests or does
+        # not close keeps one at least.)
+        text = _COMMENT.sub(b"", text)
+        if b"(" in text or b")" in text:
+            t = np.frombuffer(text, dtype=np.uint8)
+            lf = np.flatnonzero(t == LF)
+            left = np.flatnonzero((t == ord("(")) | (t == ord(")")))
+            special[np.unique(_lines_of(lf, left))] = True
+            del t, left
+    sp = np.flatnonzero(special)
+    if sp.size:
+        # The special lines' bytes go, their newlines stay: the text between them is kept.
+        if lf is None:
+            lf = np.flatnonzero(np.frombuffer(text, dtype=np.uint8) == LF)
+        a = np.concatenate([[0], lf + 1])[sp]  # [a, b): line sp in text, without newline
+        b = np.concatenate([lf, [len(text)]])[sp]
+        keep_from = np.concatenate([[0], b]).tolist()
+        keep_to = np.concatenate([a, [len(text)]]).tolist()
+        text = b"".join([text[i:j] for i, j in zip(keep_from, keep_to, strict=True)])
+    if not text.endswith(b"\n"):
+        text += b"\n"  # every word then ends at a break
+    return text
 
 
 def tokenize(src: Source) -> Words:
     """All words of the program (see module docstring)."""
     check_bytes(src, "G-code", "a G-code program")
-    special = _special_lines_from_bytes(src)
-    comments = _comment_mask(src, special)
+    special = np.zeros(src.n_lines, dtype=bool)
+    text = _plain_text(src, special)
+    c = np.frombuffer(text, dtype=np.uint8)
 
-    buf = _CANON[src.buf]  # upper case, whitespace 0; a fresh array
-    if comments is not None:
-        buf[comments] = 0
-    for a, b in zip(src.starts[special], src.ends[special], strict=True):
-        buf[a:b] = 0
-    c = buf[buf != 0]
-    del buf
-    if c.size == 0 or c[-1] != LF:
-        c = np.append(c, np.uint8(LF))  # every word then ends at a break
-
-    is_letter = _LETTER[c]
-    is_lf = c == LF
-    brk_mask = is_letter | is_lf
+    brk_mask = np.frombuffer(text.translate(_BREAK), dtype=bool)
     brk = np.flatnonzero(brk_mask)
-    lf_at = is_lf[brk]
-    line_at_brk = np.cumsum(lf_at, dtype=np.int64) - lf_at  # newlines before each break
+    lf_at = c[brk] == LF
     lfpos = brk[lf_at]
     rank = np.flatnonzero(~lf_at)
     lpos = brk[rank]
-    span_end = brk[rank + 1]  # c ends with a newline, so every letter has a next break
-    wline = line_at_brk[rank].astype(np.int64)
+    span_end = brk[rank + 1]  # text ends with a newline, so every letter has a next break
+    # A word's line is the count of newlines before it: of the breaks before the i-th
+    # letter (rank[i] of them), i are letters.
+    wline = rank - np.arange(rank.size)
     empty = span_end == lpos + 1
 
     # Lines the plain path cannot read: a letter with no number (a keyword such as
-    # Siemens SOFT, or "X" alone), or number characters before the line's first letter.
+    # Siemens SOFT, or "X" alone), or number characters before the line's first letter
+    # (right after a newline, or at the start).
     bad = set(np.unique(wline[empty]).tolist())
-    orphan = np.flatnonzero(~brk_mask[1:] & is_lf[:-1]) + 1
+    after = lfpos + 1
+    after = after[after < c.size]
+    orphan = after[~brk_mask[after]]
     if c.size and not brk_mask[0]:
         orphan = np.concatenate([[0], orphan])
     if orphan.size:
-        bad.update(np.searchsorted(lfpos, orphan, side="left").tolist())
+        bad.update(_lines_of(lfpos, orphan).tolist())
 
-    sep = np.where(brk_mask, np.uint8(SPACE), c)
-    # The per-byte masks and per-break arrays are spent: they go before the numbers are
-    # parsed, the lexer's peak (1M lines of arcs: 200 MB).
-    del brk, brk_mask, is_letter, is_lf, lf_at, line_at_brk, rank
+    numbers = text.translate(_NUMBERS)
+    # The per-break arrays are spent: they go before the numbers are parsed, the lexer's
+    # peak.
+    del brk, brk_mask, lf_at, rank, after, orphan
     values = None
     for attempt in range(2):
         bad_arr = np.array(sorted(bad), dtype=np.int64)
-        for a, b in _line_ranges(lfpos, c.size, bad_arr):
-            sep[a:b] = SPACE
+        if bad_arr.size:
+            sep = np.frombuffer(numbers, dtype=np.uint8).copy()
+            for a, b in _line_ranges(lfpos, c.size, bad_arr):
+                sep[a:b] = SPACE
+            numbers = sep.tobytes()
+            del sep
         want = ~empty & ~np.isin(wline, bad_arr)
         if not want.any():
             break
-        vals = _fromstring(sep)
+        vals = _fromstring(numbers)
         if vals is not None and vals.size == np.count_nonzero(want):
             # (made after the parse and copied, not kept: a 5M-line raster's peak stays
             # 35 MB lower so, in ru_maxrss)
@@ -182,9 +182,8 @@ def tokenize(src: Source) -> Words:
         if attempt:  # pragma: no cover - the validation below finds every bad span
             raise AssertionError("G-code lexer: numbers could not be aligned with words")
         bad.update(np.unique(wline[want & ~_well_formed(c, lpos + 1, span_end)]).tolist())
-    # The per-byte and per-break arrays are spent: they go before the words are cut out
-    # (1M lines: 120 MB off the reader's peak).
-    del sep, lfpos
+    # The numbers' text is spent: it goes before the words are cut out.
+    del numbers, lfpos
     if values is None:  # no word to read
         values = np.full(lpos.size, np.nan)
     if bad:
@@ -211,12 +210,24 @@ def tokenize(src: Source) -> Words:
     return result
 
 
-def _fromstring(sep: NDArray[np.uint8]) -> NDArray[np.float64] | None:
+def _line_ranges(
+    lfpos: NDArray[np.int64], size: int, lines: NDArray[np.int64]
+) -> list[tuple[int, int]]:
+    """[start, end) of the given lines in a buffer whose newlines are at ``lfpos``."""
+    out = []
+    for k in lines:
+        a = int(lfpos[k - 1]) + 1 if k > 0 else 0
+        b = int(lfpos[k]) if k < lfpos.size else size
+        out.append((a, b))
+    return out
+
+
+def _fromstring(sep: bytes) -> NDArray[np.float64] | None:
     """Parse space-separated numbers in C; None if some text is not a number."""
     with warnings.catch_warnings():
         warnings.simplefilter("error")
         try:
-            return np.fromstring(sep.tobytes(), dtype=np.float64, sep=" ")
+            return np.fromstring(sep, dtype=np.float64, sep=" ")
         except (DeprecationWarning, ValueError):
             return None
 

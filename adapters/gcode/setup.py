@@ -14,11 +14,52 @@ takes them as mm (the ``--machine`` file's units).
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass, field
 
-from adapters.gcode.control import MachineSetup
 from core.model.errors import InputError
 from core.model.inputs import read_input
 from core.model.setup import ControllerSetup
+
+Vec = tuple[float, float, float]
+ORIGIN: Vec = (0.0, 0.0, 0.0)
+
+
+@dataclass
+class MachineSetup:
+    """What the machine file says about the controller's state before the program runs.
+
+    Attributes
+    ----------
+    home, home2 : (3,) mm
+        G28 and G30 positions in machine coordinates (LinuxCNC's default parameter file
+        has both at machine zero).
+    offsets : dict code -> (3,) mm
+        Work offsets (G54 = 540 ... G59.3 = 593, Siemens G505-G599) in machine coordinates.
+    tool_radius : dict tool -> mm
+        Tool radii for cutter compensation (LinuxCNC tool table, machine TOML [tools]).
+    tool_length : dict tool -> mm
+        Tool lengths for G43 (added to Z).
+    default_path_mode : str or None
+        "exact_stop" or "continuous": what the controller does where the program sets no
+        path mode (None: the dialect's default).
+    tool_radius_override : float or None
+        --tool-radius: the radius of every tool for cutter compensation.
+    search : tuple of str
+        Folders for subprogram files after the program's own.
+    peck_clearance : float or None
+        mm above the last peck that G73/G83 come back to (None: LinuxCNC's 0.254 mm).
+    """
+
+    home: Vec = ORIGIN
+    home2: Vec = ORIGIN
+    offsets: dict[int, Vec] = field(default_factory=dict)
+    tool_radius: dict[int, float] = field(default_factory=dict)
+    tool_length: dict[int, float] = field(default_factory=dict)
+    default_path_mode: str | None = None
+    tool_radius_override: float | None = None
+    search: tuple[str, ...] = ()
+    peck_clearance: float | None = None
+
 
 _WORD = re.compile(r"([A-Za-z])\s*([-+]?(?:\d+\.?\d*|\.\d+))")
 _OFFSET = re.compile(r"G(\d+)(?:\.(\d))?(?:P(\d+))?")

