@@ -942,3 +942,20 @@ def test_refusal_names_the_first_offending_line_and_the_construct(
         assert w in err.message.lower()
     as_written = text.split("\n")[line - 1]
     assert str(err) == f"{path}:{line}: {err.message}: {as_written}"
+
+
+def test_a_number_beyond_a_double_or_a_function_of_one_is_a_line_error():
+    """A literal of 400 digits is inf as a double: refused where it is read, with its line
+    (it reached math.sin as inf and crashed with "math domain error" -- fuzzer, Siemens
+    dialect). A function whose value is undefined (FIX of inf cannot be an integer) or out
+    of range (EXP[1000] = 1.97e434) is refused the same way."""
+    big = "9" * 400
+    err = refusal(f"G21 G90\n#1=[SIN[{big}]]\nG1 X#1 Y1 F100\n")
+    assert err.line == 2 and "(400 digits) is out of range" in str(err)
+    err = refusal(f"G21 G90\nX58.4865 Y=SIN(-{big})\n", "t.mpf")
+    assert err.line == 2 and "out of range" in str(err)
+    err = refusal("G21 G90\n#1=[EXP[1000]]\nG1 X#1 Y1 F100\n")
+    assert err.line == 2 and "EXP of 1000" in str(err)
+    # in range, the same functions read as before: SIN[30] = 0.5
+    tp = read("G21 G90\n#1=[SIN[30]]\nG1 X#1 Y1 F100\n")
+    assert_path(tp, [3], [[0.5, 1, 0]])

@@ -186,7 +186,10 @@ def read_number(c: Cursor) -> float | None:
     if not seen_digit:
         return None
     c.pos = j
-    return float(t[i:j])
+    value = float(t[i:j])
+    if not math.isfinite(value):  # hundreds of digits: beyond a double
+        raise ExprError(f"number {t[i : i + 12]}... ({j - i} digits) is out of range")
+    return value
 
 
 # ----------------------------------------------------------------------------- brackets
@@ -502,7 +505,14 @@ def evaluate(node: Node, store: Store, variables: dict[str, float] | None = None
     if kind == "not":
         return float(not _num(evaluate(node[1], store, variables)))
     if kind == "fn":
-        return FUNCTIONS[node[1]](_num(evaluate(node[2], store, variables)))
+        x = _num(evaluate(node[2], store, variables))
+        try:
+            result = FUNCTIONS[node[1]](x)
+        except (ValueError, OverflowError):  # SIN of inf, FIX of nan ...
+            raise ExprError(f"{node[1]} of {x:g} is undefined") from None
+        if not math.isfinite(result):
+            raise ExprError(f"{node[1]} of {x:g} gives a value out of range")
+        return result
     if kind == "atan":
         y = _num(evaluate(node[1], store, variables))
         x = _num(evaluate(node[2], store, variables))
