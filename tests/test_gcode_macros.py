@@ -959,3 +959,15 @@ def test_a_number_beyond_a_double_or_a_function_of_one_is_a_line_error():
     # in range, the same functions read as before: SIN[30] = 0.5
     tp = read("G21 G90\n#1=[SIN[30]]\nG1 X#1 Y1 F100\n")
     assert_path(tp, [3], [[0.5, 1, 0]])
+
+
+def test_a_g_word_beyond_a_double_is_refused_without_a_numpy_warning():
+    """G followed by 400 nines (inf): the dialect guess cast it to an integer first
+    ("RuntimeWarning: invalid value encountered in cast" on stderr, an error under -W error);
+    now only the reader's one-line refusal."""
+    import warnings
+
+    with warnings.catch_warnings():
+        warnings.simplefilter("error")
+        err = refusal("G" + "9" * 400 + " X1\n", "t.nc")
+    assert err.line == 1 and "G word out of range" in str(err)

@@ -86,7 +86,10 @@ def detect_dialect(path: str, words: Words) -> str:
         return by_ext
     if words.keywords:
         return "siemens"
-    g_codes = np.unique(np.rint(words.value[words.letter == ord("G")] * 10).astype(np.int64))
+    g_values = words.value[words.letter == ord("G")]
+    # a G word out of range (G1e999) is refused where it is read; here it only must not be
+    # cast to an integer
+    g_codes = np.unique(np.rint(g_values[np.abs(g_values) < 1e6] * 10).astype(np.int64))
     if np.isin(g_codes, [600, 6410, 6420, 6430, 6440, 6450, 7000, 7100, 5000]).any():
         return "siemens"
     if np.isin(g_codes, [901, 911, 611]).any():
