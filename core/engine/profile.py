@@ -55,7 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
-from core.model.pieces import pieces
+from core.model.pieces import pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
 
@@ -581,6 +581,15 @@ def _window_caps(
     return np.minimum(b, stop_speed(s[ahead] - s, acc[k], jerk[k]))
 
 
+def _positive(h: NDArray) -> NDArray | slice:
+    """Where ``h > 0``: its indices, or a slice where they are one run (a hold at every
+    move but the first or last: 1M arcs, 8 MB of indices less)."""
+    at = np.flatnonzero(h > 0)
+    if at.size and at[-1] - at[0] + 1 == at.size:
+        return slice(int(at[0]), int(at[-1]) + 1)
+    return at
+
+
 class _Holds:
     """The holds of every move, what the rounds of :func:`build_profile` reuse: the length
     left between them (``between``, may be < 0; ``inner`` = max(between, 0)) and where they
@@ -589,10 +598,10 @@ class _Holds:
     def __init__(self, length, h_start, h_end, r_start, r_end) -> None:
         self.between = length - h_start - h_end
         self.inner = np.maximum(self.between, 0.0)
-        self.at_start = np.flatnonzero(h_start > 0)
-        self.at_end = np.flatnonzero(h_end > 0)
-        self.run_start = (r_start * h_start)[self.at_start]
-        self.run_end = (r_end * h_end)[self.at_end]
+        self.at_start = _positive(h_start)
+        self.at_end = _positive(h_end)
+        self.run_start = r_start[self.at_start] * h_start[self.at_start]
+        self.run_end = r_end[self.at_end] * h_end[self.at_end]
 
     def time(self, v0: NDArray, v1: NDArray) -> NDArray:
         """(n,) time of the holds at entry speed ``v0`` and exit speed ``v1`` (0 where a
@@ -829,6 +838,11 @@ class _Rounds:
             if new.size:
                 k = idx[new]
                 eff[new] = effective_acceleration(dv[new], self.acc[k], self.jerk[k])
+        elif isinstance(at, slice):  # every move: in pieces, without (n,) temporaries
+            acc, jerk = self.acc, self.jerk
+            eff = piecewise(
+                dv.size, np.float64, lambda s: effective_acceleration(dv[s], acc[s], jerk[s])
+            )
         else:
             eff = effective_acceleration(dv, self.acc[at], self.jerk[at])
         # kept for the next round where the ramps are a part of the moves only (where all
@@ -921,16 +935,10 @@ class _Rounds:
         else:
             cand, new, old = idx[differ], eff[differ], old_in[differ]
         del idx, eff, old_in, differ, rest
-        sign = np.sign(new - old)
-        back = sign * last[cand] < 0
-        out = np.where(back, np.sqrt(old * new), new)
-        step = np.zeros(a.size, dtype=np.int8)
-        step[cand] = np.sign(out - old).astype(np.int8)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            change = float(np.nanmax(np.abs(out / old - 1.0), initial=0.0))
+        out, step, change = _damped(new, old, last, cand)
         # the terms and the denominator follow where the acceleration changed
         moved = out != old
-        del new, old, sign, back
+        del new, old
         if not moved.all():
             cand = np.flatnonzero(moved) if isinstance(cand, slice) else cand[moved]
             out = out[moved]
@@ -947,6 +955,30 @@ class _Rounds:
         else:
             self.step_dn = step
         return change
+
+
+def _damped(
+    new: NDArray, old: NDArray, last: NDArray, cand: NDArray | slice
+) -> tuple[NDArray, NDArray, float]:
+    """The damping of :meth:`_Rounds._direction` on the moves ``cand`` (an index or a
+    slice of all): their next accelerations (the geometric mean of ``old`` and ``new``
+    where the step turns back against ``last``, the previous round's signs), the (n,) signs
+    of this round's steps and the largest relative change. (Elementwise, in pieces: the
+    same values as over all of them at once, without their (n,) temporaries.)"""
+    out = np.empty(new.size)
+    step = np.zeros(last.size, dtype=np.int8)
+    change = 0.0
+    for s in pieces(new.size):
+        nw, od = new[s], old[s]
+        where = s if isinstance(cand, slice) else cand[s]
+        sign = np.sign(nw - od)
+        back = sign * last[where] < 0
+        o = out[s]
+        o[...] = np.where(back, np.sqrt(od * nw), nw)
+        step[where] = np.sign(o - od).astype(np.int8)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            change = max(change, float(np.nanmax(np.abs(o / od - 1.0), initial=0.0)))
+    return out, step, change
 
 
 def _blend_holds(
@@ -1054,8 +1086,10 @@ def build_profile(
     if end_factor != 1.0 and tp.n:
         acc[-1] *= end_factor
     if release_directions:
-        tp.release_derived()
+        tp.release_derived(keep=("junctions",))
     b = boundary_caps(ev, cap, pause)
+    if release_directions:
+        tp.release_derived()  # the junctions too, once the caps have them
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
@@ -1063,6 +1097,8 @@ def build_profile(
         h_start, h_end, r_end = _blend_holds(
             ev, cap, caps, acc, a_blend if along_blends > 0.0 else None, h_start, h_end, r_end
         )
+    if along_blends > 0.0:
+        del a_blend  # (used by the holds only)
     holds = _Holds(length, h_start, h_end, r_start, r_end)
     jerk_limited = bool(np.isfinite(jerk).any())
     # The rounds change the accelerations only (see _Rounds); the last one (the rounds' end,
@@ -1088,12 +1124,19 @@ def build_profile(
             v = rnd.passes()
             break
     del rnd  # the rounds' caches go before the speeds and times are made (1M moves: 50 MB)
+    del b, caps  # (the boundary caps: the passes are done)
     if speeds is None:
         speeds = _moves(v, cap, a_up, a_dn, holds)
         del v
+    # The holds' lengths and times are in the speeds now: the rounds' copies of them go
+    # before the ramps are made (1M arcs, a hold at every move: 48 MB), and the cruise
+    # lengths once the ramps' marks have them.
+    del holds
     v0, peak, v1, time, d_cr = speeds
+    del speeds
     if jerk_limited:
         marks = _ramp_marks(v0, peak, v1, d_cr)
+        del d_cr
         _, dv_up, lo_up = _ramp_changes(v0, peak, v1, marks, rising=True)
         _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, marks, rising=False)
         del marks

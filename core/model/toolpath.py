@@ -303,7 +303,9 @@ class ToolPath:
             return line
         return f"{line} of {self.origins[int(self.origin[k])]}"
 
-    #: Derived (n, 3) columns the models need once: :meth:`release_derived` frees them.
+    #: Derived columns the models need once: :meth:`release_derived` frees them. The (n, 3)
+    #: directions, and the junctions' (n,) angles, curvature jumps, operations and indices
+    #: (the profile reads the indices last).
     _DERIVED = (
         "tangent_start",
         "tangent_end",
@@ -311,11 +313,15 @@ class ToolPath:
         "curvature_vector_end",
         "axis_share",
         "_samples",
+        "turn_angle",
+        "curvature_jump",
+        "op_index",
+        "junctions",
     )
 
     def release_derived(self, keep: tuple[str, ...] = ()) -> None:
-        """Forget the derived direction columns but those named in ``keep`` (recomputed if
-        asked for again): 120 bytes a move that a finished analysis no longer needs."""
+        """Forget the derived columns but those named in ``keep`` (recomputed if asked for
+        again): 152 bytes a move that a finished analysis no longer needs."""
         for name in self._DERIVED:
             if name not in keep:
                 self.__dict__.pop(name, None)
