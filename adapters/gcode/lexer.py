@@ -131,24 +131,31 @@ def tokenize(src: Source) -> Words:
     buf = _CANON[src.buf]  # upper case, whitespace 0; a fresh array
     if comments is not None:
         buf[comments] = 0
-    for a, b in zip(src.starts[special], src.ends[special], strict=True):
+    skip = np.flatnonzero(special)
+    for a, b in zip(src.starts_of(skip), src.ends[skip], strict=True):
         buf[a:b] = 0
     c = buf[buf != 0]
     del buf
     if c.size == 0 or c[-1] != LF:
         c = np.append(c, np.uint8(LF))  # every word then ends at a break
 
-    is_letter = _LETTER[c]
     is_lf = c == LF
-    brk_mask = is_letter | is_lf
+    brk_mask = _LETTER[c]
+    brk_mask |= is_lf  # the breaks: letters and newlines
     brk = np.flatnonzero(brk_mask)
     lf_at = is_lf[brk]
-    line_at_brk = np.cumsum(lf_at, dtype=np.int64) - lf_at  # newlines before each break
+    line_at_brk = np.cumsum(lf_at, dtype=np.int64)
+    line_at_brk -= lf_at  # newlines before each break
     lfpos = brk[lf_at]
     rank = np.flatnonzero(~lf_at)
+    # (each per-break array goes as soon as it is spent: the lexer's peak is here, 1M lines
+    # of arcs: 130 MB less)
+    wline = line_at_brk[rank]
+    del line_at_brk
     lpos = brk[rank]
-    span_end = brk[rank + 1]  # c ends with a newline, so every letter has a next break
-    wline = line_at_brk[rank].astype(np.int64)
+    rank += 1
+    span_end = brk[rank]  # c ends with a newline, so every letter has a next break
+    del brk, lf_at, rank
     empty = span_end == lpos + 1
 
     # Lines the plain path cannot read: a letter with no number (a keyword such as
@@ -163,7 +170,7 @@ def tokenize(src: Source) -> Words:
     sep = np.where(brk_mask, np.uint8(SPACE), c)
     # The per-byte masks and per-break arrays are spent: they go before the numbers are
     # parsed, the lexer's peak (1M lines of arcs: 200 MB).
-    del brk, brk_mask, is_letter, is_lf, lf_at, line_at_brk, rank
+    del brk_mask, is_lf
     values = None
     for attempt in range(2):
         bad_arr = np.array(sorted(bad), dtype=np.int64)
