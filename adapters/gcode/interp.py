@@ -546,21 +546,25 @@ class Interpreter:
         known = np.zeros((self.na, 3), dtype=bool)
         for axis, ch in enumerate(AXIS_LETTERS):
             gvn = given[ch]
-            mm = np.where(gvn, vals[ch], 0.0) * self.scale
+            # (in place throughout: the same values as the expressions in the comments,
+            # without their (lines,) temporaries; 5M lines, this is the reader's peak)
+            mm = np.where(gvn, vals[ch], 0.0)
+            mm *= self.scale
             abs_set = gvn & absolute
-            inc = np.where(gvn & ~absolute, mm, 0.0)
-            csum = np.cumsum(inc)
-            last = np.where(abs_set, np.arange(self.na), -1)
+            csum = np.where(gvn & ~absolute, mm, 0.0)  # the increments, then their sums
+            np.cumsum(csum, out=csum)
+            last = np.arange(self.na)  # np.where(abs_set, np.arange(na), -1), then its max
+            last[~abs_set] = -1
             np.maximum.accumulate(last, out=last)
             before = 0.0 if self.initial is None else self.initial.pos[axis]
-            # (in place: the same values as np.where(last >= 0, mm[i] - csum[i], before) + csum
-            # with i = max(last, 0), without four (lines,) temporaries)
-            at = np.maximum(last, 0)
+            # np.where(last >= 0, mm[i] - csum[i], before) + csum with i = max(last, 0)
+            none = last < 0
+            at = np.maximum(last, 0, out=last)
             base = mm[at]
             base -= csum[at]
-            base[last < 0] = before
+            base[none] = before
             np.add(base, csum, out=pos[:, axis])
-            del at, base
+            del mm, csum, last, at, none, base
             known[:, axis] = np.maximum.accumulate(gvn)
             if self.initial is not None and self.initial.known[axis]:
                 known[:, axis] = True
