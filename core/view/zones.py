@@ -165,18 +165,25 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     np.divide(ev.element_feed[esel], tp.feed[esel], out=ratio[n_js:])
     points = np.bincount(pt_zone, minlength=n_z)
     n_j = np.bincount(j_zone, minlength=n_z)
-    del j_zone
+    # (the junctions' indices are found again for the zones listed: the sort is the peak)
+    del j_zone, jsel
     # The worst point of each zone: sort by (zone, ratio), take the first of each zone.
     order = np.lexsort((ratio, pt_zone))
+    del ratio
     worst = np.full(n_z, -1, dtype=np.int64)
     if order.size:
+        zs = pt_zone[order]
+        del pt_zone
         head = np.ones(order.size, dtype=bool)
-        head[1:] = pt_zone[order[1:]] != pt_zone[order[:-1]]
-        worst[pt_zone[order[head]]] = order[head]
+        head[1:] = zs[1:] != zs[:-1]
+        worst[zs[head]] = order[head]
+        del zs, head
+    del order
 
     candidates = np.flatnonzero(points > 0)
     if count is None:
         return len(candidates)
+    jsel = np.flatnonzero(ev.junction_reduction >= ZONE_THRESHOLD)
     top = candidates[np.argsort(-lost[candidates], kind="stable")[:count]]
     zones = []
     for rank, z in enumerate(top, start=1):
