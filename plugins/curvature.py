@@ -29,6 +29,7 @@ from numpy.typing import NDArray
 
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
 from core.model import geometry as g
+from core.model.pieces import pieces
 
 NAME = "curvature"
 LABELS = ("jerk X", "jerk Y", "jerk Z")
@@ -67,8 +68,13 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     keep = (tp.turn_angle[j] <= TOL.tangent_angle) & (tp.curvature_jump[j] > TOL.curvature_jump)
     j = j[keep]
     jump = tp.curvature_jump[j]
-    t = g.unit(tp.tangent_end[j] + tp.tangent_start[j + 1])
-    jerk, axis = tangential_jerk(t, machine)
+    # Row by row, in pieces: the same numbers without (m, 3) temporaries of every junction.
+    jerk = np.empty(j.size)
+    axis = np.empty(j.size, dtype=np.intp)
+    for b in pieces(j.size):
+        jb = j[b]
+        t = g.unit(tp.tangent_end[jb] + tp.tangent_start[jb + 1])
+        jerk[b], axis[b] = tangential_jerk(t, machine)
     feed = transition_feed(jerk, machine.curvature_transition_time, jump)
     return [
         Indicator(

@@ -250,13 +250,12 @@ class Interpreter:
 
     def _release_words(self) -> None:
         """Let the word arrays go (1M lines: 50 MB) before the columns are built: what
-        follows reads the per-line arrays. The decimal-point notice is worked out now and
-        added where it always was (the notices keep their order)."""
-        self._bare_notice = self._decimal_point_args() if self.dialect == "fanuc" else None
+        follows reads the per-line arrays."""
         w = self.w
-        # Empty copies, not views: an empty view keeps its whole base array alive.
+        # Empty copies, not views: an empty view keeps its whole base array alive. (The
+        # values went once read, in _axes.)
         w.line, w.letter = w.line[:0].copy(), w.letter[:0].copy()
-        w.value, w.bare = w.value[:0].copy(), w.bare[:0].copy()
+        w.bare = w.bare[:0].copy()
         del self.li
         # So do the per-line values the positions were made of, and the G-code groups but
         # the two the columns read (1M lines: another 70 MB).
@@ -502,6 +501,11 @@ class Interpreter:
         for ch in "XYZIJKRFPQNT":
             vals[ch], pres[ch] = self._single(ch)
         self.vals, self.pres = vals, pres
+        # Every letter's values are per line now: the words' own go before the positions
+        # are worked out (1M lines of arcs: 38 MB), once the decimal-point notice, which
+        # quotes one, is made (it is added where it always was: the notices keep their order).
+        self._bare_notice = self._decimal_point_args() if self.dialect == "fanuc" else None
+        self.w.value = self.w.value[:0].copy()  # (a copy: an empty view keeps its base)
 
         dwell_line = gg[G.DWELL] >= 0
         self.dwell_time = np.broadcast_to(0.0, (self.na,))  # read only; _dwells sets it
@@ -553,19 +557,27 @@ class Interpreter:
         absolute = (self.distance == 900) | machine
         pos = np.zeros((self.na, 3))
         known = np.zeros((self.na, 3), dtype=bool)
-        lines = np.arange(self.na)
         for axis, ch in enumerate(AXIS_LETTERS):
             gvn = given[ch]
-            mm = np.where(gvn, vals[ch], 0.0) * self.scale
+            # (in place throughout: the same values as the expressions in the comments,
+            # without their (lines,) temporaries; 5M lines, this is the reader's peak)
+            mm = np.where(gvn, vals[ch], 0.0)
+            mm *= self.scale
             abs_set = gvn & absolute
-            inc = np.where(gvn & ~absolute, mm, 0.0)
-            csum = np.cumsum(inc)
-            last = np.where(abs_set, lines, -1)
+            csum = np.where(gvn & ~absolute, mm, 0.0)  # the increments, then their sums
+            np.cumsum(csum, out=csum)
+            last = np.arange(self.na)  # np.where(abs_set, np.arange(na), -1), then its max
+            last[~abs_set] = -1
             np.maximum.accumulate(last, out=last)
             before = 0.0 if self.initial is None else self.initial.pos[axis]
-            mm -= csum  # (the same differences as taken at the last absolute line)
-            base = np.where(last >= 0, mm[np.maximum(last, 0)], before)
-            pos[:, axis] = base + csum
+            # np.where(last >= 0, mm[i] - csum[i], before) + csum with i = max(last, 0)
+            none = last < 0
+            at = np.maximum(last, 0, out=last)
+            base = mm[at]
+            base -= csum[at]
+            base[none] = before
+            np.add(base, csum, out=pos[:, axis])
+            del mm, csum, last, at, none, base
             known[:, axis] = np.maximum.accumulate(gvn)
             if self.initial is not None and self.initial.known[axis]:
                 known[:, axis] = True
@@ -730,13 +742,17 @@ class Interpreter:
         kind = self.kind[mi]
         # Only the columns no line fills start from their defaults (empty_columns' values):
         # the others are built once, not over a default (1M moves: 100 MB less at the peak).
+        # The defaults that are replaced whole, not filled in, are read-only broadcasts of
+        # their one value (as the tool path keeps such columns): no memory per move.
+        # So are the arc columns until _arcs, which makes them once the arcs are worked out
+        # (a program of lines has none: 1M lines, 56 MB of NaN less).
         cols: dict[str, Any] = {
-            "center": np.full((n, 3), np.nan),
-            "normal": np.full((n, 3), np.nan),
-            "sweep": np.full(n, np.nan),
-            "tool": np.full(n, -1, dtype=np.int32),
-            "dwell": np.zeros(n),
-            "tolerance": np.full(n, np.nan),
+            "center": np.broadcast_to(np.full(3, np.nan), (n, 3)),
+            "normal": np.broadcast_to(np.full(3, np.nan), (n, 3)),
+            "sweep": np.broadcast_to(np.nan, (n,)),
+            "tool": np.broadcast_to(np.int32(-1), (n,)),
+            "dwell": np.broadcast_to(0.0, (n,)),
+            "tolerance": np.broadcast_to(np.nan, (n,)),
             "op_offsets": np.array([0, n], dtype=np.int64),
         }
         cols["kind"] = kind.astype(np.int8)
@@ -838,6 +854,13 @@ class Interpreter:
         if neither.any():
             raise self.error(al[np.argmax(neither)], "arc without I/J/K or R")
         off = np.stack([np.nan_to_num(v[c][lines]) for c in CENTRE_LETTERS], axis=1)
+        r_idx = np.flatnonzero(has_r)
+        r_val = v["R"][lines[r_idx]] * scale[r_idx] if r_idx.size else None
+        # The per-line centre words are read: they go before the centres and sweeps are
+        # worked out (1M arcs: 16 MB of I and J).
+        for c in (*CENTRE_LETTERS, "R"):
+            v.pop(c, None)
+            p.pop(c, None)
         off *= scale[:, None]
         off_n = g.dot(off, normal)
         bad = has_ijk & (np.abs(off_n) > TOL.zero_length)
@@ -861,14 +884,13 @@ class Interpreter:
             centre[absolute] = off_abs + g.dot(sa, na)[:, None] * na
         del off_in, off_abs
 
-        r_idx = np.flatnonzero(has_r)
-        if r_idx.size:
+        if r_val is not None:
             centre[r_idx] = self._r_centres(
                 start[arc_l[r_idx]],
                 end[arc_l[r_idx]],
                 normal[r_idx],
                 ccw[r_idx],
-                v["R"][lines[r_idx]] * scale[r_idx],
+                r_val,
                 al[r_idx],
             )
         # Row by row, in pieces: the same numbers, bounded (m, 3) temporaries.
@@ -891,7 +913,7 @@ class Interpreter:
                 f"(radius {r0[k]:.4f} mm from the start)",
             )
         del r0, r1, mismatch
-        turns = np.zeros(arc_l.size)
+        turns = np.broadcast_to(0.0, (m,))  # (no memory per arc)
         if self.dialect == "linuxcnc":
             pt = p["P"][lines]
             pv = v["P"][lines]
@@ -908,8 +930,14 @@ class Interpreter:
                 start[arc_l[b]], end[arc_l[b]], centre[b], normal[b], ccw[b], turns[b]
             ),
         )
+        # The moves' arc columns (NaN for lines), made now that the arcs' temporaries are gone.
+        n = mi.size
+        cols["center"] = np.full((n, 3), np.nan)
         cols["center"][arc_l] = centre
+        centre = centre[:0].copy()  # it goes (rebound: the pieces' functions above read it)
+        cols["normal"] = np.full((n, 3), np.nan)
         cols["normal"][arc_l] = normal
+        cols["sweep"] = np.full(n, np.nan)
         cols["sweep"][arc_l] = sweep
 
     def _r_centres(

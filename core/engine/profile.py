@@ -55,7 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
-from core.model.pieces import pieces
+from core.model.pieces import pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
 
@@ -581,26 +581,43 @@ def _window_caps(
     return np.minimum(b, stop_speed(s[ahead] - s, acc[k], jerk[k]))
 
 
+def _positive(h: NDArray) -> NDArray | slice:
+    """Where ``h > 0``: its indices, or a slice where they are one run (a hold at every
+    move but the first or last: 1M arcs, 8 MB of indices less)."""
+    at = np.flatnonzero(h > 0)
+    if at.size and at[-1] - at[0] + 1 == at.size:
+        return slice(int(at[0]), int(at[-1]) + 1)
+    return at
+
+
 class _Holds:
     """The holds of every move, what the rounds of :func:`build_profile` reuse: the length
-    left between them (``between``, may be < 0; ``inner`` = max(between, 0)) and where they
-    are (most moves have none: their hold time is computed where they are only)."""
+    left between them (``between``, may be < 0; :meth:`inner` = max(between, 0)) and where
+    they are (most moves have none: their hold time is computed where they are only). The
+    holds' own columns are kept as given (the profile's, not copies); what is made of them
+    is made where used (5M moves: 120 MB less while the rounds run)."""
 
     def __init__(self, length, h_start, h_end, r_start, r_end) -> None:
         self.between = length - h_start - h_end
-        self.inner = np.maximum(self.between, 0.0)
-        self.at_start = np.flatnonzero(h_start > 0)
-        self.at_end = np.flatnonzero(h_end > 0)
-        self.run_start = (r_start * h_start)[self.at_start]
-        self.run_end = (r_end * h_end)[self.at_end]
+        self.at_start = _positive(h_start)
+        self.at_end = _positive(h_end)
+        self._columns = (h_start, h_end, r_start, r_end)
+
+    def inner(self, k: NDArray | slice = slice(None)) -> NDArray:
+        """max(between, 0) of the moves ``k`` (all by default)."""
+        return np.maximum(self.between[k], 0.0)
 
     def time(self, v0: NDArray, v1: NDArray) -> NDArray:
         """(n,) time of the holds at entry speed ``v0`` and exit speed ``v1`` (0 where a
         hold would run at speed 0: a stop there is the ramps' business)."""
+        h_start, h_end, r_start, r_end = self._columns
+        a, b = self.at_start, self.at_end
         t = np.zeros(v0.size)
         with np.errstate(divide="ignore", invalid="ignore"):
-            ts = self.run_start / v0[self.at_start]
-            te = self.run_end / v1[self.at_end]
+            ts = r_start[a] * h_start[a]  # the length run in the hold, then its time
+            ts /= v0[a]
+            te = r_end[b] * h_end[b]
+            te /= v1[b]
         # run >= 0 and v >= 0: a quotient is finite, +inf (v = 0) or NaN (0 / 0), both 0
         ts[~(ts < np.inf)] = 0.0
         te[~(te < np.inf)] = 0.0
@@ -694,18 +711,30 @@ def _ramp_changes(v0, peak, v1, marks, rising: bool) -> tuple[NDArray, NDArray, 
     if idx.size == 0:
         return phase, np.zeros(n), np.zeros(n)
     # the chain of each move in ``idx`` (every chain starts at a move in ``idx``)
-    c = np.cumsum(~cont[idx]) - 1
+    c = np.cumsum(~cont[idx])
+    c -= 1
+    del cont
     edge = c[1:] != c[:-1]
     first = idx[np.concatenate([[True], edge])]
     last = idx[np.concatenate([edge, [True]])]
+    del edge
+    # (np.where(through[k], v[k], peak[k]) as peak[k] with v[k] written where through: the
+    # same values, fewer (n,) temporaries; this is the profile's peak on 5M arcs)
     if rising:
         lo = v0[first]
-        hi = np.where(through[last], v1[last], peak[last])
+        hi = peak[last]
+        k = last[through[last]]
+        hi[through[last]] = v1[k]
     else:
-        hi = np.where(through[first], v0[first], peak[first])
+        hi = peak[first]
+        k = first[through[first]]
+        hi[through[first]] = v0[k]
         lo = v1[last]
+    del first, last, k
+    hi -= lo  # the ramps' speed changes
     dv = np.zeros(n)
-    dv[idx] = (hi - lo)[c]
+    dv[idx] = hi[c]
+    del hi
     low = np.zeros(n)
     low[idx] = lo[c]
     return phase, dv, low
@@ -731,7 +760,7 @@ class _Rounds:
         self.caps = caps
         self.cap, self.acc, self.jerk, self.holds = cap, acc, jerk, holds
         self.a_up, self.a_dn = acc.copy(), acc.copy()
-        self.term_up = _pass_terms(self.a_up, holds.inner)
+        self.term_up = _pass_terms(self.a_up, holds.inner())
         self.term_dn = self.term_up.copy()
         with np.errstate(divide="ignore", invalid="ignore"):
             self.den = 1.0 / self.a_up
@@ -829,6 +858,11 @@ class _Rounds:
             if new.size:
                 k = idx[new]
                 eff[new] = effective_acceleration(dv[new], self.acc[k], self.jerk[k])
+        elif isinstance(at, slice):  # every move: in pieces, without (n,) temporaries
+            acc, jerk = self.acc, self.jerk
+            eff = piecewise(
+                dv.size, np.float64, lambda s: effective_acceleration(dv[s], acc[s], jerk[s])
+            )
         else:
             eff = effective_acceleration(dv, self.acc[at], self.jerk[at])
         # kept for the next round where the ramps are a part of the moves only (where all
@@ -921,23 +955,17 @@ class _Rounds:
         else:
             cand, new, old = idx[differ], eff[differ], old_in[differ]
         del idx, eff, old_in, differ, rest
-        sign = np.sign(new - old)
-        back = sign * last[cand] < 0
-        out = np.where(back, np.sqrt(old * new), new)
-        step = np.zeros(a.size, dtype=np.int8)
-        step[cand] = np.sign(out - old).astype(np.int8)
-        with np.errstate(divide="ignore", invalid="ignore"):
-            change = float(np.nanmax(np.abs(out / old - 1.0), initial=0.0))
+        out, step, change = _damped(new, old, last, cand)
         # the terms and the denominator follow where the acceleration changed
         moved = out != old
-        del new, old, sign, back
+        del new, old
         if not moved.all():
             cand = np.flatnonzero(moved) if isinstance(cand, slice) else cand[moved]
             out = out[moved]
         del moved
         a[cand] = out
         off[cand] = out != acc[cand]
-        term[cand] = _pass_terms(out, self.holds.inner[cand])
+        term[cand] = _pass_terms(out, self.holds.inner(cand))
         with np.errstate(divide="ignore", invalid="ignore"):
             den = 1.0 / self.a_up[cand]
             den += 1.0 / self.a_dn[cand]
@@ -947,6 +975,30 @@ class _Rounds:
         else:
             self.step_dn = step
         return change
+
+
+def _damped(
+    new: NDArray, old: NDArray, last: NDArray, cand: NDArray | slice
+) -> tuple[NDArray, NDArray, float]:
+    """The damping of :meth:`_Rounds._direction` on the moves ``cand`` (an index or a
+    slice of all): their next accelerations (the geometric mean of ``old`` and ``new``
+    where the step turns back against ``last``, the previous round's signs), the (n,) signs
+    of this round's steps and the largest relative change. (Elementwise, in pieces: the
+    same values as over all of them at once, without their (n,) temporaries.)"""
+    out = np.empty(new.size)
+    step = np.zeros(last.size, dtype=np.int8)
+    change = 0.0
+    for s in pieces(new.size):
+        nw, od = new[s], old[s]
+        where = s if isinstance(cand, slice) else cand[s]
+        sign = np.sign(nw - od)
+        back = sign * last[where] < 0
+        o = out[s]
+        o[...] = np.where(back, np.sqrt(od * nw), nw)
+        step[where] = np.sign(o - od).astype(np.int8)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            change = max(change, float(np.nanmax(np.abs(o / od - 1.0), initial=0.0)))
+    return out, step, change
 
 
 def _blend_holds(
@@ -1054,8 +1106,10 @@ def build_profile(
     if end_factor != 1.0 and tp.n:
         acc[-1] *= end_factor
     if release_directions:
-        tp.release_derived()
+        tp.release_derived(keep=("junctions",))
     b = boundary_caps(ev, cap, pause)
+    if release_directions:
+        tp.release_derived()  # the junctions too, once the caps have them
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
@@ -1063,6 +1117,8 @@ def build_profile(
         h_start, h_end, r_end = _blend_holds(
             ev, cap, caps, acc, a_blend if along_blends > 0.0 else None, h_start, h_end, r_end
         )
+    if along_blends > 0.0:
+        del a_blend  # (used by the holds only)
     holds = _Holds(length, h_start, h_end, r_start, r_end)
     jerk_limited = bool(np.isfinite(jerk).any())
     # The rounds change the accelerations only (see _Rounds); the last one (the rounds' end,
@@ -1088,12 +1144,18 @@ def build_profile(
             v = rnd.passes()
             break
     del rnd  # the rounds' caches go before the speeds and times are made (1M moves: 50 MB)
+    del b, caps  # (the boundary caps: the passes are done)
     if speeds is None:
         speeds = _moves(v, cap, a_up, a_dn, holds)
         del v
+    # The holds' times are in the speeds now: the lengths between them go before the ramps
+    # are made, and the cruise lengths once the ramps' marks have them.
+    del holds
     v0, peak, v1, time, d_cr = speeds
+    del speeds
     if jerk_limited:
         marks = _ramp_marks(v0, peak, v1, d_cr)
+        del d_cr
         _, dv_up, lo_up = _ramp_changes(v0, peak, v1, marks, rising=True)
         _, dv_dn, lo_dn = _ramp_changes(v0, peak, v1, marks, rising=False)
         del marks

@@ -306,7 +306,10 @@ class ToolPath:
             return line
         return f"{line} of {self.origins[int(self.origin[k])]}"
 
-    #: Derived (n, 3) columns the models need once: :meth:`release_derived` frees them.
+    #: Derived columns the models need once: :meth:`release_derived` frees them. The (n, 3)
+    #: directions, the junctions' (n,) angles, curvature jumps, operations and indices (the
+    #: profile reads the indices last), and the arcs' radii and pitches (the lengths, once
+    #: made, are kept; a drawing makes these again).
     _DERIVED = (
         "tangent_start",
         "tangent_end",
@@ -314,14 +317,25 @@ class ToolPath:
         "curvature_vector_end",
         "axis_share",
         "_samples",
+        "turn_angle",
+        "curvature_jump",
+        "op_index",
+        "junctions",
+        "_arc",
     )
 
     def release_derived(self, keep: tuple[str, ...] = ()) -> None:
-        """Forget the derived direction columns but those named in ``keep`` (recomputed if
-        asked for again): 120 bytes a move that a finished analysis no longer needs."""
+        """Forget the derived columns but those named in ``keep`` (recomputed if asked for
+        again): 152 bytes a move, and 25 an arc, that a finished analysis no longer needs."""
         for name in self._DERIVED:
             if name not in keep:
                 self.__dict__.pop(name, None)
+
+    def release_arc_shapes(self) -> None:
+        """Forget the arcs' radii and pitches (recomputed if asked for again): a drawing that
+        has sampled its arcs is done with them (5M arcs: 200 MB)."""
+        for name in ("_arc", "radius", "pitch"):
+            self.__dict__.pop(name, None)
 
     # ------------------------------------------------------------------ basics
     def __len__(self) -> int:
