@@ -137,11 +137,16 @@ def tokenize(src: Source) -> Words:
     lf_at = c[brk] == LF
     lfpos = brk[lf_at]
     rank = np.flatnonzero(~lf_at)
+    del lf_at
     lpos = brk[rank]
-    span_end = brk[rank + 1]  # text ends with a newline, so every letter has a next break
     # A word's line is the count of newlines before it: of the breaks before the i-th
-    # letter (rank[i] of them), i are letters.
-    wline = rank - np.arange(rank.size)
+    # letter (rank[i] of them), i are letters. (Per-word arrays are made in place and the
+    # per-break ones go once spent: 5M lines of arcs are 25M words, 200 MB per array.)
+    wline = np.arange(rank.size)
+    np.subtract(rank, wline, out=wline)
+    rank += 1
+    span_end = brk[rank]  # text ends with a newline, so every letter has a next break
+    del brk, rank
     empty = span_end == lpos + 1
 
     # Lines the plain path cannot read: a letter with no number (a keyword such as
@@ -156,10 +161,8 @@ def tokenize(src: Source) -> Words:
     if orphan.size:
         bad.update(_lines_of(lfpos, orphan).tolist())
 
+    del brk_mask, after, orphan
     numbers = text.translate(_NUMBERS)
-    # The per-break arrays are spent: they go before the numbers are parsed, the lexer's
-    # peak.
-    del brk, brk_mask, lf_at, rank, after, orphan
     values = None
     for attempt in range(2):
         bad_arr = np.array(sorted(bad), dtype=np.int64)
@@ -174,10 +177,14 @@ def tokenize(src: Source) -> Words:
             break
         vals = _fromstring(numbers)
         if vals is not None and vals.size == np.count_nonzero(want):
-            # (made after the parse and copied, not kept: a 5M-line raster's peak stays
-            # 35 MB lower so, in ru_maxrss)
-            values = np.full(lpos.size, np.nan)
-            values[want] = vals
+            if vals.size == lpos.size:
+                values = vals  # every word has its number: no copy
+            else:
+                # (made after the parse and copied, not kept: a 5M-line raster's peak
+                # stays 35 MB lower so, in ru_maxrss)
+                values = np.full(lpos.size, np.nan)
+                values[want] = vals
+            del vals
             break
         if attempt:  # pragma: no cover - the validation below finds every bad span
             raise AssertionError("G-code lexer: numbers could not be aligned with words")
@@ -189,11 +196,11 @@ def tokenize(src: Source) -> Words:
     if bad:
         special[np.array(sorted(bad), dtype=np.int64)] = True
     if want.all():
-        line, letter, value, s, e = wline, c[lpos], values, lpos + 1, span_end
+        line, letter, value, at, e = wline, c[lpos], values, lpos, span_end
     else:
         line, letter, value = wline[want], c[lpos[want]], values[want]
-        s, e = lpos[want] + 1, span_end[want]
-    bare = _bare_integers(c, s, e, letter, value)
+        at, e = lpos[want], span_end[want]
+    bare = _bare_integers(c, at, e, letter, value)
 
     result = Words(line=line, letter=letter, value=value, bare=bare, n_lines=src.n_lines)
     sp = np.flatnonzero(special)
@@ -261,26 +268,39 @@ for _ch in b"XYZIJKR":
 
 def _bare_integers(
     c: NDArray[np.uint8],
-    s: NDArray[np.int64],
+    at: NDArray[np.int64],
     e: NDArray[np.int64],
     letter: NDArray[np.uint8],
     value: NDArray[np.float64],
 ) -> NDArray[np.bool_]:
-    """Dimension words with a nonzero integer value and no decimal point (see Words.bare)."""
-    bare = np.zeros(s.size, dtype=bool)
+    """Dimension words with a nonzero integer value and no decimal point (see Words.bare);
+    word i is its letter at ``c[at[i]]``, then its number ``c[at[i] + 1 : e[i]]``."""
+    bare = np.zeros(at.size, dtype=bool)
     cand = np.flatnonzero(_DIMENSION[letter] & (value == np.round(value)) & (value != 0))
     if cand.size:
-        start, lens = s[cand], e[cand] - s[cand]
+        # (the candidates' arrays only, made in place: a 5M-line program of arcs has a
+        # candidate on every line, and this is the lexer's peak)
+        start = at[cand]
+        start += 1
+        last = e[cand]
+        last -= 1
+        lens = last - start
+        lens += 1
         dot = np.zeros(cand.size, dtype=bool)
         # Character k of every number at once (k up to SHORT_NUMBER; a shorter number looks
         # at its own last character again): memory per word, not per character.
         short = lens <= SHORT_NUMBER
-        last = start + lens - 1
-        for k in range(int(lens[short].max(initial=0))):
-            dot |= c[np.minimum(start + k, last)] == ord(".")
         long = np.flatnonzero(~short)  # absurdly long numbers: character by character
+        ll = lens[long]
+        width = int(np.max(lens, where=short, initial=0))
+        del lens, short
+        pos = np.empty(cand.size, dtype=np.int64)
+        for k in range(width):
+            np.add(start, k, out=pos)
+            np.minimum(pos, last, out=pos)
+            dot |= c[pos] == ord(".")
+        del pos
         if long.size:
-            ll = lens[long]
             owner = np.repeat(np.arange(long.size), ll)
             offs = np.arange(owner.size) - np.repeat(np.cumsum(ll) - ll, ll)
             isdot = c[start[long][owner] + offs] == ord(".")
