@@ -422,7 +422,7 @@ def decide(
         return ranked, None, f"none: the best fit, {lead.name}, " + " and ".join(why)
     lead = ok[0]
     # equal: remaining gaps within TIE_SHARE of the best's remaining gap (a share of what
-    # it removed would make a 30 % larger residual "equal" wherever the gap was large)
+    # it removed made a 47 % larger residual "equal" where the gap was large)
     margin = TIE_SHARE * lead.held_out_gap_after
     equal = [
         r
