@@ -874,25 +874,33 @@ class _Rounds:
             self.last_dn = keep
         return eff
 
-    def _chains(self, rising, idx, at, cont, start, through, v0, v1, peak) -> NDArray:
-        """The effective acceleration of the moves ``idx`` in ramps that chain moves end to
-        end (``start``: a move begins its ramp): each move gets its ramp's whole speed
-        change, from the ramp's first move to its last."""
-        c = np.cumsum(start) - 1
-        first = idx[start]
-        last_of = np.empty(idx.size, dtype=bool)
-        last_of[:-1] = start[1:]
-        last_of[-1] = True
-        end = idx[last_of]
+    @staticmethod
+    def _ramp_dv(rising, idx, at, start, through, v0, v1, peak) -> NDArray:
+        """The speed change of each of the moves ``idx``'s ramp, from the ramp's first move
+        to its last (``start``: a move begins its ramp; ramps chain moves end to end). Where
+        every move is a ramp of its own, each is its own first and last: read through
+        ``at`` (whole columns when every move is in a ramp), no chain gathered."""
+        if start.all():
+            first = last = at
+            after_first = after_last = idx + 1
+            chain = None
+        else:
+            chain = np.cumsum(start) - 1
+            first = idx[start]
+            last_of = np.empty(idx.size, dtype=bool)
+            last_of[:-1] = start[1:]
+            last_of[-1] = True
+            last = idx[last_of]
+            del last_of
+            after_first, after_last = first + 1, last + 1
         if rising:
             lo = v0[first]
-            hi = np.where(through[end + 1], v1[end], peak[end])
+            hi = np.where(through[after_last], v1[last], peak[last])
         else:
-            hi = np.where(through[first + 1], v0[first], peak[first])
-            lo = v1[end]
-        dv = (hi - lo)[c]
-        del cont, start, c, first, last_of, end, lo, hi
-        return self._effective(rising, idx, dv, at)
+            hi = np.where(through[after_first], v0[first], peak[first])
+            lo = v1[last]
+        dv = hi - lo
+        return dv if chain is None else dv[chain]
 
     def _direction(self, rising, phase, through, v0, v1, peak) -> float:
         """The next accelerations of one direction (updated in place, with the passes' terms
@@ -922,19 +930,11 @@ class _Rounds:
                 cont[0] = False
                 cont[1:] &= np.diff(idx) == 1
             start = ~cont
-            if start.all():  # every move a ramp of its own: its own first and last
-                if rising:
-                    lo = v0[at]
-                    hi = np.where(through[idx + 1], v1[at], peak[at])
-                else:
-                    hi = np.where(through[idx + 1], v0[at], peak[at])
-                    lo = v1[at]
-                dv = hi - lo
-                del cont, start, lo, hi
-                eff = self._effective(rising, idx, dv, at)
-                del dv
-            else:
-                eff = self._chains(rising, idx, at, cont, start, through, v0, v1, peak)
+            del cont
+            dv = self._ramp_dv(rising, idx, at, start, through, v0, v1, peak)
+            del start
+            eff = self._effective(rising, idx, dv, at)
+            del dv
         else:
             eff = np.zeros(0)
         # The step (and the damping) is nil wherever the new acceleration is the current
