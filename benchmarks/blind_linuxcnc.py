@@ -8,7 +8,8 @@ Programs come from ten families (benchmarks/blind/families.py: random polygons, 
 slots, gears of chords, free-form chord paths, spiral pockets, a dome raster, engraving,
 thread milling, a 2.5D part, long kinked lines), each drawn from a seed. Seed sets are kept
 apart: ``tune`` (seeds 100-999), used while developing the effects and the decision rule,
-and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999) and ``score3`` (30000-30999),
+and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999), ``score3`` (30000-30999)
+and ``score4`` (40000-40999),
 each run for the figures in the README (the README says which were looked at afterwards).
 Every case is one program run through LinuxCNC 2.9's real planner on the harness's default
 mill with ONE setting changed (per-axis acceleration or speed, servo period, the path
@@ -49,7 +50,9 @@ INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
 #: ``score2`` (seeds 20000-20509): a second held-out set, recorded on 2026-11-26 after the
 #: ``score`` set had been diagnosed once and its misses studied (so ``score`` is no longer
 #: unseen); diagnosed once, with the code of the commit that reports it.
-SEEDS = {"tune": 100, "score": 9000, "score2": 20000, "score3": 30000}
+#: ``score4`` (seeds 40000-40509): recorded at the start of the 2026-11-26 afternoon work on
+#: LinuxCNC's blend choice (parabolic blends, kinks) and diagnosed once, with its final code.
+SEEDS = {"tune": 100, "score": 9000, "score2": 20000, "score3": 30000, "score4": 40000}
 #: Programs per changed setting.
 PER_VARIANT = 4
 

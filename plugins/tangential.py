@@ -39,7 +39,7 @@ TIT is the machine's path tolerance, or the program's own where it sets one
 LinuxCNC 2.9's planner (``corner_blending = "linuxcnc"``)
 ---------------------------------------------------------
 Its source (``src/emc/tp/tp.c``, ``blendmath.c``; facts, not code, carried over) blends
-differently in three ways the profile feels on chord paths:
+differently in five ways the profile feels:
 
 * a junction whose direction change at the segments' speed v over one servo period T needs
   little acceleration -- a = (v / T + A) |t2 - t1|_k / A_k below ``ARC_BLEND_KINK_RATIO``
@@ -51,7 +51,15 @@ differently in three ways the profile feels on chord paths:
   as large as that speed needs: R_plan = max(v_plan^2 / a_n, min(s / b, R)) with s the
   distance of a parabolic blend at half the acceleration (``blendComputeParameters``);
 * along the arc the speed may change at half the acceleration of its plane
-  (``BLEND_ACC_RATIO_TANGENTIAL``): the profile takes that from the holds (core.engine.profile).
+  (``BLEND_ACC_RATIO_TANGENTIAL``): the profile takes that from the holds (core.engine.profile);
+* a junction that is not a kink gets the blend arc only where it promises more speed than
+  the two other ways through (``tpChooseBestBlend``): a parabolic blend (the segments overlap;
+  both keep half their acceleration over their whole length) and a tangent kink at
+  v kink_ratio / kink; and next to a programmed arc only where the arc's plane holds the
+  blend (a helix's does not): there the choice is between the other two
+  (:func:`linuxcnc_choice`). A short blend arc at a long servo period, or a line into a
+  helix, is run as a parabolic blend;
+* a kink costs both segments its share of their acceleration (``tcSetKinkProperties``).
 
 The servo period is the machine's block time over ``TP_MIN_SEGMENT_CYCLES`` = 1.02.
 """
@@ -74,6 +82,14 @@ CHUNK = 65_536
 #: stop whatever the axes could do; it is named for that, not for an axis.
 NO_BLEND = "exact path: no blending"
 LABELS = (*(f"{q} {ax}" for q in ("feed", "acceleration", "jerk") for ax in AXES), NO_BLEND)
+#: LinuxCNC's other two ways through a corner (``corner_blending = "linuxcnc"``).
+PARABOLIC = "parabolic blend (half acceleration)"
+KINK = "tangent kink"
+#: LinuxCNC 2.9 tp_types.h: a parabolic blend's tolerance bound holds only above
+#: TP_MIN_ARC_ANGLE (rad, of the intersection angle's complement); two directions are the
+#: same (a blend arc lies in an arc's plane) within TP_ANGLE_EPSILON (rad).
+LCNC_MIN_ARC_ANGLE = 1e-3
+LCNC_ANGLE_EPSILON = 1e-6
 
 
 def inserted_radius(
@@ -183,11 +199,12 @@ def plane_acceleration(
 
 def linuxcnc_blends(
     tp: ToolPath, j: NDArray[np.int64], beta: NDArray, tit: NDArray, machine: Machine
-) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's corners (module docstring): the radius that limits the corner speed,
     the arc's radius as inserted (R_plan; 0 where the junction is run as tangent), whether
-    it is tangent, and the normal speed limit sqrt(a_n R) of the plane's acceleration with
-    the axis that sets it."""
+    it is tangent, the normal speed limit sqrt(a_n R) of the plane's acceleration with
+    the axis that sets it, and the kink: the largest axis share of the acceleration turning
+    at speed in one servo period needs (tangent below LCNC_KINK_RATIO)."""
     t1, t2 = tp.tangent_end[j], tp.tangent_start[j + 1]
     acc = machine.max_acceleration
     a_plane, axis = plane_acceleration(t1, t2, acc)
@@ -214,7 +231,118 @@ def linuxcnc_blends(
     tangent = kink < LCNC_KINK_RATIO
     r_geom = np.nan_to_num(np.maximum(r_geom, 0.0), nan=0.0)
     r_plan = np.where(tangent, 0.0, np.nan_to_num(np.maximum(r_plan, 0.0), nan=0.0))
-    return r_geom, r_plan, tangent, np.sqrt(a_n * r_geom), axis
+    return r_geom, r_plan, tangent, np.sqrt(a_n * r_geom), axis, kink
+
+
+def linuxcnc_choice(
+    tp: ToolPath,
+    j: NDArray[np.int64],
+    beta: NDArray,
+    tit: NDArray,
+    arc_feed: NDArray,
+    r_plan: NDArray,
+    kink: NDArray,
+    machine: Machine,
+) -> tuple[NDArray, NDArray, NDArray]:
+    """LinuxCNC 2.9's choice at the junctions that are not tangent kinks (``tpHandleBlendArc``,
+    ``tpChooseBestBlend``): the blend arc, a parabolic blend or a tangent kink, whichever
+    promises the highest speed -- the arc's top speed (over its length in one block time too);
+    half the speed a parabolic blend reaches (``estimateParabolicBlendPerformance`` / 2: it
+    halves both segments' acceleration); the kink speed v kink_ratio / kink. An arc is tried
+    only between lines, or where the arcs' planes hold the blend (no helix): else the choice
+    is between the other two. Ties go to the parabolic blend (the first of the three).
+
+    Returns, per junction: the mode (0 arc, 1 parabolic, 2 tangent kink), the speed it
+    crosses the junction at (a parabolic blend: the blend speed the planner computes while
+    running, with the segments' halved accelerations; the tool runs the blend's two halves
+    at that speed on average, so it costs the time of that speed), and the share of the
+    tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio).
+    """
+    k0, k1 = j, j + 1
+    a_path = _path_acceleration(tp, np.concatenate([k0, k1]), machine)
+    a0, a1 = a_path[: j.size], a_path[j.size :]
+    t_int = machine.interpolation_time
+    l0, l1 = tp.length[k0], tp.length[k1]
+    f0 = np.fmin(tp.feed[k0], l0 / t_int)
+    f1 = np.fmin(tp.feed[k1], l1 / t_int)
+    cos_half = np.cos(beta / 2.0)
+    sin_half = np.sin(beta / 2.0)
+    tol = tit  # the path tolerance the arc was given (G64 P, else the machine's)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        # planning: the segments not yet finalised (half of each may go), their acceleration
+        # halved (a parabolic end is the default) and reduced by the kink ratio
+        plan = _parabolic_speed(
+            a0 * 0.5 * (1.0 - LCNC_KINK_RATIO),
+            a1 * 0.5 * (1.0 - LCNC_KINK_RATIO),
+            l0 / 2.0,
+            l1 / 2.0,
+            l0,
+            l1,
+            f0,
+            f1,
+            tol,
+            sin_half,
+        )
+        perf_parabolic = cos_half * (plan[0] + plan[1]) / 2.0 / 2.0
+        perf_tangent = np.fmin(f0, f1) * LCNC_KINK_RATIO / kink
+        arc_ok = _arc_blend_possible(tp, j)
+        arc_len = r_plan * beta
+        perf_arc = np.where(arc_ok, np.fmin(arc_feed, arc_len / t_int), 0.0)
+        run = _parabolic_speed(a0 * 0.5, a1 * 0.5, l0, l1, l0, l1, f0, f1, tol, sin_half)
+    perf = np.stack([perf_arc, np.nan_to_num(perf_parabolic), np.nan_to_num(perf_tangent)])
+    # the first of parabolic, tangent, arc that is strictly best (find_max_element)
+    mode = np.where((perf[0] > perf[1]) & (perf[0] > perf[2]), 0, np.where(perf[2] > perf[1], 2, 1))
+    speed = np.where(
+        mode == 0, arc_feed, np.where(mode == 1, np.fmin(run[0], run[1]), perf_tangent)
+    )
+    share = np.where(mode == 1, 0.5, np.where(mode == 2, 1.0 - LCNC_KINK_RATIO, 1.0))
+    return mode, speed, share
+
+
+def _path_acceleration(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray:
+    """(m,) the tangential acceleration of moves ``k`` (min_k A_k / share_k; arcs keep
+    BLEND_ACC_RATIO_TANGENTIAL of it for their normal acceleration)."""
+    share = tp.axis_share[k]
+    acc = np.asarray(machine.max_acceleration, dtype=np.float64)
+    with np.errstate(divide="ignore"):
+        a = np.where(share > 0, acc[None, :] / share, np.inf).min(axis=1)
+    a = np.where(np.isfinite(a), a, acc.min())
+    return np.where(tp.is_arc[k], a * LCNC_TANGENTIAL_RATIO, a)
+
+
+def _parabolic_speed(a0, a1, reach0, reach1, l0, l1, f0, f1, tol, sin_half):
+    """Both segments' speeds at a parabolic blend (tp.c ``tpComputeBlendVelocity``): each
+    at most the peak it reaches over ``reach`` and its feed; the blend lasts at most the
+    time either needs to cross its segment at that speed and at least the time the slower
+    one needs to stop; a path tolerance bounds both by 2 sqrt(a0 T / sin(beta / 2))."""
+    v0 = np.fmin(np.sqrt(a0 * reach0), f0)
+    v1 = np.fmin(np.sqrt(a1 * reach1), f1)
+    t_blend = np.fmin(np.fmin(l0 / v0, l1 / v1), np.fmax(v0 / a0, v1 / a1))
+    v0 = np.fmin(v0, t_blend * a0)
+    v1 = np.fmin(v1, t_blend * a1)
+    bound = (tol > 0.0) & (sin_half > np.sin(LCNC_MIN_ARC_ANGLE))
+    v_tol = np.where(bound, 2.0 * np.sqrt(a0 * tol / sin_half), np.inf)
+    return np.fmin(v0, v_tol), np.fmin(v1, v_tol)
+
+
+def _arc_blend_possible(tp: ToolPath, j: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """Whether LinuxCNC tries a blend arc (``tpCheckBlendArcType``, the coplanarity checks
+    of the line-arc, arc-line and arc-arc blends): always between lines; next to an arc only
+    where the plane of the two tangents is the arc's plane, within LCNC_ANGLE_EPSILON (a
+    helix's rise tilts it)."""
+    t1, t2 = tp.tangent_end[j], tp.tangent_start[j + 1]
+    ok = np.ones(j.size, dtype=bool)
+    b = np.cross(t1, t2)
+    nb = g.norm(b)
+    for k in (j, j + 1):
+        arc = tp.is_arc[k]
+        if not arc.any():
+            continue
+        with np.errstate(invalid="ignore", divide="ignore"):
+            cos = np.abs(g.dot(b, tp.normal[k])) / nb
+        coplanar = cos > np.cos(LCNC_ANGLE_EPSILON)  # pmUnitCartsColinear
+        ok &= ~arc | coplanar
+    return ok
 
 
 @hookimpl
@@ -229,16 +357,40 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     tit = np.where(np.isnan(tol), machine.path_tolerance, tol)
     tangent = None
     if machine.corner_blending == "linuxcnc":
-        radius, inserted, tangent, v_plane, axis = linuxcnc_blends(tp, j, beta, tit, machine)
+        radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(tp, j, beta, tit, machine)
     else:
         shorter = np.minimum(tp.length[j], tp.length[j + 1])
         radius = inserted = inserted_radius(beta, shorter, tit)
     feed, limit = corner_feed(tp.tangent_end[j], tp.tangent_start[j + 1], radius, machine)
+    labels = LABELS
+    extra = {}
     if tangent is not None:
         # LinuxCNC bounds the normal acceleration by the plane's, whatever the direction
         lower = v_plane < feed
         feed = np.where(lower, v_plane, feed)
         limit = np.where(lower, LABELS.index("acceleration X") + axis, limit)
+        # the junctions that are not kinks: arc, parabolic blend or kink, the fastest
+        share = 1.0 - np.where(tangent, kink, 0.0)
+        choose = np.flatnonzero(~tangent & (tit > 0.0))
+        if choose.size:
+            mode, speed, sh = linuxcnc_choice(
+                tp,
+                j[choose],
+                beta[choose],
+                tit[choose],
+                feed[choose],
+                inserted[choose],
+                kink[choose],
+                machine,
+            )
+            other = mode > 0
+            c = choose[other]
+            feed[c] = speed[other]
+            limit[c] = np.where(mode[other] == 1, len(LABELS), len(LABELS) + 1)
+            inserted[c] = 0.0
+            share[choose] = sh
+        labels = (*LABELS, PARABOLIC, KINK)
+        extra = {"acceleration_share": share}
         feed = np.where(tangent & (tit > 0.0), np.inf, feed)
     limit = np.where(tit == 0.0, LABELS.index(NO_BLEND), limit)
     return [
@@ -248,7 +400,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             index=j,
             feed=feed,
             limit=limit,
-            labels=LABELS,
+            labels=labels,
             # The speed stays constant over the inserted arc (sec. 2.1, Figure 2b): from
             # its tangent point R tan(beta/2) before the corner to the one after; the tool
             # runs the arc, R beta/2 on each side.
@@ -257,6 +409,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
                 "angle_deg": np.degrees(beta),
                 "hold_mm": np.nan_to_num(inserted * np.tan(beta / 2.0), nan=0.0, posinf=0.0),
                 "travel_mm": np.nan_to_num(inserted * beta / 2.0, nan=0.0, posinf=0.0),
-            },
+            }
+            | extra,
         )
     ]

@@ -189,3 +189,81 @@ def test_an_arc_the_neighbours_keep_below_its_limit_changes_speed_along_it(nc):
     assert pr.v_exit[0] == pytest.approx(31.17, abs=0.01)
     held = nc.predict(tp, Setup(machine=lcnc("paper"), ramps=True)).profile
     assert held.v_exit[0] < 27.3
+
+
+def helix_corner(rise=1.0, feed=40.0):
+    """A 10 mm line along +X, then a quarter turn clockwise about +Z from (10, 0) round
+    (6, 0) rising ``rise`` mm: a 90 degree corner (the helix starts along -Y, tilted by its
+    rise)."""
+    return path(
+        [
+            {"end": (10.0, 0.0, 0.0)},
+            {"end": (6.0, -4.0, rise), "center": (6.0, 0.0, 0.0), "ccw": False},
+        ],
+        feed=feed,
+    )
+
+
+def test_a_helix_corner_gets_a_parabolic_blend(nc):
+    """No blend arc between a line and a helix (the plane of the two tangents is not the
+    helix's: tpCreateLineArcBlend's coplanarity check), so LinuxCNC chooses between a
+    parabolic blend and a tangent kink (tpChooseBestBlend), by the speed each promises.
+    Helix: 4 mm radius, quarter turn, rise 1: length sqrt(2 pi ^ 2 + 1) = 6.3623 mm, start
+    tangent (0, -0.98757, 0.15718), beta = 90 deg. Its tangential acceleration: X and Y shares
+    0.98757 and Z 0.15718 give 2000 / 0.98757 = 2025.2, half of it on an arc, 1012.6.
+    - kink: (40 / 0.001 + 2000) |t2 - t1| / 2000 = 21 (X), twice next to an arc: 42; speed
+      40 0.1 / 42 = 0.0952 mm/s;
+    - parabolic, as planned (segments half available, acceleration x 0.5 x 0.9): line 900,
+      helix 455.7; peaks min(sqrt(900 5), 40) = 40 and min(sqrt(455.7 3.181), 40) = 38.07;
+      blend time min(10 / 40, 6.3623 / 38.07, max(40 / 900, 38.07 / 455.7)) = 0.08354 s;
+      tolerance bound 2 sqrt(900 0.01 / sin 45) = 7.135 on both; promise cos45 7.135 / 2 =
+      2.523 mm/s > 0.0952: parabolic.
+    Run at the blend speed with the halved accelerations (line 1000): 2 sqrt(1000 0.01 /
+    sin 45) = 7.5212 mm/s, and both blocks keep half their acceleration."""
+    ind = tangential(nc, helix_corner(), lcnc())
+    assert ind.feed[0] == pytest.approx(2.0 * math.sqrt(1000.0 * 0.01 / math.sin(math.pi / 4)))
+    assert ind.labels[ind.limit[0]].startswith("parabolic blend")
+    assert ind.values["hold_mm"][0] == 0.0  # no arc inserted
+    assert ind.values["acceleration_share"][0] == 0.5
+    prof = nc.predict(helix_corner(), Setup(machine=lcnc(), ramps=True)).profile
+    assert prof.a_up[0] == pytest.approx(1000.0)
+    assert prof.a_up[1] == pytest.approx(2000.0 / (2 * math.pi / math.hypot(2 * math.pi, 1)) / 2)
+    # the same corner in the arc's plane (no rise) gets a blend arc: full accelerations
+    flat = tangential(nc, helix_corner(rise=0.0), lcnc())
+    assert flat.values["hold_mm"][0] > 0.0
+    assert flat.values["acceleration_share"][0] == 1.0
+    flat_prof = nc.predict(helix_corner(rise=0.0), Setup(machine=lcnc(), ramps=True)).profile
+    assert flat_prof.a_up[0] == pytest.approx(2000.0)
+
+
+def slow_servo(servo):
+    m = lcnc()
+    return dataclasses.replace(m, interpolation_time=servo * 1.02, path_tolerance=0.001)
+
+
+def test_a_blend_arc_too_short_for_the_servo_period_gives_way_to_a_parabolic_blend(nc):
+    """90 degrees, 10 mm lines at 20 mm/s, tolerance 0.001 mm. The arc: d = sin45 0.001 /
+    (1 - cos45) = R = 0.0024142 mm, speed sqrt(2000 R) = 2.1974, length R pi / 2 =
+    0.0037922 mm, at most its length per servo period: 0.92946 mm/s at 4 ms, 0.74357 at
+    5 ms. The parabolic blend promises cos45 2 sqrt(900 0.001 / sin45) / 2 = 0.79776; the
+    kink 20 0.1 / ((20 / T + 2000) / 2000) = 0.5714 (4 ms), 0.6667 (5 ms). At 4 ms the arc
+    is best, at 5 ms the parabolic blend: run at 2 sqrt(1000 0.001 / sin45) = 2.3784 mm/s."""
+    at4 = tangential(nc, turn(90.0, feed=20.0), slow_servo(0.004))
+    assert at4.values["hold_mm"][0] > 0.0
+    assert at4.values["acceleration_share"][0] == 1.0
+    at5 = tangential(nc, turn(90.0, feed=20.0), slow_servo(0.005))
+    assert at5.values["hold_mm"][0] == 0.0
+    assert at5.values["acceleration_share"][0] == 0.5
+    assert at5.feed[0] == pytest.approx(2.0 * math.sqrt(1000.0 * 0.001 / math.sin(math.pi / 4)))
+
+
+def test_a_tangent_kink_takes_its_share_off_both_accelerations(nc):
+    """0.1 degree at 100 mm/s: kink (100 / 0.001 + 2000) / 2000 max(1 - cos b, sin b) =
+    51 sin(0.1 deg) = 0.0890117 < 0.1: run as tangent, and LinuxCNC takes that share off
+    both segments' acceleration (tcSetKinkProperties, tcGetOverallMaxAccel): 2000 (1 -
+    0.0890117) = 1821.98 mm/s^2."""
+    ind = tangential(nc, turn(0.1), lcnc())
+    kink = 51.0 * math.sin(math.radians(0.1))
+    assert ind.values["acceleration_share"][0] == pytest.approx(1.0 - kink)
+    prof = nc.predict(turn(0.1), Setup(machine=lcnc(), ramps=True)).profile
+    assert prof.a_up[0] == pytest.approx(2000.0 * (1.0 - kink))

@@ -113,6 +113,10 @@ def test_presets_load_and_the_840d_keeps_the_papers_t_int():
     lc = load_preset("linuxcnc-sim")
     assert np.allclose(lc.max_feed, 250.0) and np.allclose(lc.max_acceleration, 2000.0)
     assert np.isinf(lc.max_jerk).all()
+    # [TRAJ] MAX_LINEAR_VELOCITY = 250 mm/s of default_mill_mm.ini: a rapid along (0.6, 0.8),
+    # whose axes would allow 250 / 0.8 = 312.5 mm/s, runs at 250
+    assert lc.max_path_feed == pytest.approx(250.0)
+    assert lc.rapid_speed(np.array([[0.6, 0.8, 0.0]]))[0] == pytest.approx(250.0)
 
 
 def test_840d_preset_marks_its_assumptions():

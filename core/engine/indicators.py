@@ -144,6 +144,11 @@ class Evaluation:
     blend_rest : (n,) float, mm, or None
         What is left of each move that the planner runs as part of the arc at its end
         (LinuxCNC merges a short rest into the next blend arc); None: nothing is.
+    acceleration_share : (n,) float, or None
+        The share of its tangential acceleration each move keeps, from the junctions at its
+        two ends (``acceleration_share`` of a junction indicator; LinuxCNC halves both
+        segments' acceleration at a parabolic blend and takes the kink ratio off at a
+        tangent kink); None: every move keeps all of it.
     """
 
     toolpath: ToolPath
@@ -162,6 +167,7 @@ class Evaluation:
     junction_hold: NDArray[np.float64]
     junction_travel: NDArray[np.float64]
     blend_rest: NDArray[np.float64] | None = None
+    acceleration_share: NDArray[np.float64] | None = None
 
     @cached_property
     def junction_reduction(self) -> NDArray[np.float64]:
@@ -376,6 +382,16 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         if ind.name == BLEND_INDICATOR and "merged_mm" in ind.values:
             blend_rest = np.zeros(tp.n) if blend_rest is None else blend_rest
             blend_rest[ind.index] = np.maximum(blend_rest[ind.index], ind.values["merged_mm"])
+    acc_share = None
+    for ind in indicators:
+        if ind.at == "junction" and "acceleration_share" in ind.values:
+            share = np.asarray(ind.values["acceleration_share"], dtype=np.float64)
+            lower = share < 1.0
+            if lower.any():
+                acc_share = np.ones(tp.n) if acc_share is None else acc_share
+                k, sh = ind.index[lower], share[lower]
+                np.minimum.at(acc_share, k, sh)
+                np.minimum.at(acc_share, k + 1, sh)
     efeed = tp.feed.copy()
     eind = np.full(tp.n, -1, dtype=CODE)
     elim = np.full(tp.n, -1, dtype=CODE)
@@ -405,4 +421,5 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         junction_hold=jhold[0] if keep_all else np.where(not_below, 0.0, jhold[0]),
         junction_travel=jhold[1] if keep_all else np.where(not_below, 0.0, jhold[1]),
         blend_rest=blend_rest,
+        acceleration_share=acc_share,
     )

@@ -1103,7 +1103,13 @@ def build_profile(
         a_blend = along_blends * np.where(tp.axis_share > 0, m.max_acceleration, np.inf).min(axis=1)
     if arc_factor != 1.0:
         acc = np.where(tp.is_arc, acc * arc_factor, acc)
-    if end_factor != 1.0 and tp.n:
+    share = ev.acceleration_share
+    if share is not None:
+        # (the last block's share of a parabolic end is end_factor's: LinuxCNC halves once)
+        last = acc[-1] * min(end_factor, share[-1])
+        acc = acc * share
+        acc[-1] = last
+    elif end_factor != 1.0 and tp.n:
         acc[-1] *= end_factor
     if release_directions:
         tp.release_derived(keep=("junctions",))
