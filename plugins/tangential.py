@@ -89,6 +89,8 @@ KINK = "tangent kink"
 #: TP_MIN_ARC_ANGLE (rad, of the intersection angle's complement); two directions are the
 #: same (a blend arc lies in an arc's plane) within TP_ANGLE_EPSILON (rad).
 LCNC_MIN_ARC_ANGLE = 1e-3
+#: tc.c tcFindBlendTolerance: the share of a segment a blend arc may deviate by.
+LCNC_TOLERANCE_RATIO = 0.25
 LCNC_ANGLE_EPSILON = 1e-6
 
 
@@ -238,7 +240,6 @@ def linuxcnc_choice(
     tp: ToolPath,
     j: NDArray[np.int64],
     beta: NDArray,
-    tit: NDArray,
     arc_feed: NDArray,
     r_plan: NDArray,
     kink: NDArray,
@@ -267,7 +268,8 @@ def linuxcnc_choice(
     f1 = np.fmin(tp.feed[k1], l1 / t_int)
     cos_half = np.cos(beta / 2.0)
     sin_half = np.sin(beta / 2.0)
-    tol = tit  # the path tolerance the arc was given (G64 P, else the machine's)
+    # the program's G64 P bounds a parabolic blend; without one (NaN) nothing does
+    tol = np.nan_to_num(tp.tolerance[j], nan=0.0)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         # planning: the segments not yet finalised (half of each may go), their acceleration
         # halved (a parabolic end is the default) and reduced by the kink ratio
@@ -354,7 +356,13 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     j = j[beta > TOL.collinear_angle]
     beta = tp.turn_angle[j]
     tol = tp.tolerance[j]
-    tit = np.where(np.isnan(tol), machine.path_tolerance, tol)
+    if machine.corner_blending == "linuxcnc":
+        # tc.c tcFindBlendTolerance: a blend arc deviates at most a quarter of either
+        # segment, and that much where the program sets no tolerance (G64 without P)
+        quarter = np.fmin(tp.length[j], tp.length[j + 1]) * LCNC_TOLERANCE_RATIO
+        tit = np.where(np.isnan(tol), quarter, np.fmin(tol, quarter))
+    else:
+        tit = np.where(np.isnan(tol), machine.path_tolerance, tol)
     tangent = None
     if machine.corner_blending == "linuxcnc":
         radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(tp, j, beta, tit, machine)
@@ -377,7 +385,6 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
                 tp,
                 j[choose],
                 beta[choose],
-                tit[choose],
                 feed[choose],
                 inserted[choose],
                 kink[choose],

@@ -1,14 +1,16 @@
 """LinuxCNC 2.9's corner blending (``corner_blending = "linuxcnc"``), against hand
 calculations from the rules its planner documents in its source (tp.c tpSetupTangent,
 blendmath.c blendComputeParameters, BLEND_ACC_RATIO_TANGENTIAL); the machine: every axis
-2000 mm/s^2, no jerk limit, block time 1.02 ms (a 1 ms servo period), tolerance 0.01 mm,
-normal acceleration factor 1 (a_n = 2000)."""
+2000 mm/s^2, no jerk limit, block time 1.02 ms (a 1 ms servo period), normal acceleration
+factor 1 (a_n = 2000); the programs set G64 P0.01 (tolerance 0.01 mm) unless a test says
+otherwise."""
 
 from __future__ import annotations
 
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 
 from core.engine.effects import Setup
@@ -22,11 +24,19 @@ def lcnc(mode="linuxcnc"):
     return dataclasses.replace(m, corner_blending=mode, block_time_on_blends=True)
 
 
-def turn(deg, length=10.0, feed=100.0):
+def g64(moves, feed=100.0, tol=0.01):
+    """A path run under G64 P``tol`` (None: G64 without P)."""
+    tp = path(moves, feed=feed)
+    if tol is None:
+        return tp
+    return dataclasses.replace(tp, tolerance=np.full(tp.n, float(tol)))
+
+
+def turn(deg, length=10.0, feed=100.0, tol=0.01):
     """Two lines of ``length`` mm, the second turned by ``deg`` in XY."""
     b = math.radians(deg)
     end = (length + length * math.cos(b), length * math.sin(b), 0.0)
-    return path([{"end": (length, 0.0, 0.0)}, {"end": end}], feed=feed)
+    return g64([{"end": (length, 0.0, 0.0)}, {"end": end}], feed=feed, tol=tol)
 
 
 def tangential(nc, tp, m):
@@ -73,7 +83,7 @@ def test_speed_changes_along_an_arc_that_does_not_bind(nc):
     model does not hold at a corner that does not bind: sqrt(2 2000 1) = 63.246, 2 x 2 x 1 /
     63.246 = 0.063246 s. (The second line, 1 degree off X, may brake at 2000 / cos(1deg) =
     2000.3: its stop takes 0.0316 % less time, hence rel=1e-4.)"""
-    tp = path(
+    tp = g64(
         [
             {"end": (1.0, 0.0, 0.0)},
             {"end": (1 + math.cos(math.radians(1)), math.sin(math.radians(1)), 0.0)},
@@ -137,7 +147,7 @@ def test_what_is_left_between_two_arcs_is_a_segment(nc):
     takes its tolerance's tangent length 0.0241421 mm; the rest, 0.1 - 2 x 0.0241421 =
     0.0517157 mm, would last 0.0517157 / 6.949 = 7.4 ms, over LinuxCNC's 4 servo periods:
     a segment of its own, at most 0.0517157 / 0.00102 = 50.70 mm/s."""
-    tp = path([{"end": (10, 0, 0)}, {"end": (10, 0.1, 0)}, {"end": (20, 0.1, 0)}])
+    tp = g64([{"end": (10, 0, 0)}, {"end": (10, 0.1, 0)}, {"end": (20, 0.1, 0)}])
     ev = nc.predict(tp, Setup(machine=lcnc())).evaluation
     assert ev.element_feed[1] == pytest.approx((0.1 - 2 * 0.0241421) / 0.00102, rel=1e-5)
     assert ev.labels[ev.element_limit[1]] == "block time (rest between blend arcs)"
@@ -155,7 +165,7 @@ def test_a_short_rest_is_run_as_part_of_the_next_arc(nc):
     b = math.radians(30)
     p1 = (10 + 0.2 * math.cos(b), 0.2 * math.sin(b), 0.0)
     p2 = (p1[0] + 10 * math.cos(2 * b), p1[1] + 10 * math.sin(2 * b), 0.0)
-    tp = path([{"end": (10, 0, 0)}, {"end": p1}, {"end": p2}])
+    tp = g64([{"end": (10, 0, 0)}, {"end": p1}, {"end": p2}])
     m = lcnc()
     blend = [
         i for i in nc.indicators(tp, m) if i.name == "tangential"
@@ -182,7 +192,7 @@ def test_an_arc_the_neighbours_keep_below_its_limit_changes_speed_along_it(nc):
     20 degrees off X, brakes at 2000 / cos20 = 2128.4: 31.92 from its end). The rest after
     the arc (0.186 mm) is longer than 4 servo periods at 36 mm/s (0.144 mm): not merged."""
     b = math.radians(20)
-    tp = path([{"end": (0.3, 0, 0)}, {"end": (0.3 + 0.3 * math.cos(b), 0.3 * math.sin(b), 0)}])
+    tp = g64([{"end": (0.3, 0, 0)}, {"end": (0.3 + 0.3 * math.cos(b), 0.3 * math.sin(b), 0)}])
     d = 0.01 * math.sin(math.radians(10)) / (1 - math.cos(math.radians(10)))
     pr = nc.predict(tp, Setup(machine=lcnc(), ramps=True)).profile
     assert pr.v_exit[0] == pytest.approx(math.sqrt(4000 * (0.3 - d) + 2000 * d), rel=1e-4)
@@ -195,7 +205,7 @@ def helix_corner(rise=1.0, feed=40.0):
     """A 10 mm line along +X, then a quarter turn clockwise about +Z from (10, 0) round
     (6, 0) rising ``rise`` mm: a 90 degree corner (the helix starts along -Y, tilted by its
     rise)."""
-    return path(
+    return g64(
         [
             {"end": (10.0, 0.0, 0.0)},
             {"end": (6.0, -4.0, rise), "center": (6.0, 0.0, 0.0), "ccw": False},
@@ -237,21 +247,21 @@ def test_a_helix_corner_gets_a_parabolic_blend(nc):
 
 
 def slow_servo(servo):
-    m = lcnc()
-    return dataclasses.replace(m, interpolation_time=servo * 1.02, path_tolerance=0.001)
+    return dataclasses.replace(lcnc(), interpolation_time=servo * 1.02)
 
 
 def test_a_blend_arc_too_short_for_the_servo_period_gives_way_to_a_parabolic_blend(nc):
     """90 degrees, 10 mm lines at 20 mm/s, tolerance 0.001 mm. The arc: d = sin45 0.001 /
     (1 - cos45) = R = 0.0024142 mm, speed sqrt(2000 R) = 2.1974, length R pi / 2 =
     0.0037922 mm, at most its length per servo period: 0.92946 mm/s at 4 ms, 0.74357 at
-    5 ms. The parabolic blend promises cos45 2 sqrt(900 0.001 / sin45) / 2 = 0.79776; the
-    kink 20 0.1 / ((20 / T + 2000) / 2000) = 0.5714 (4 ms), 0.6667 (5 ms). At 4 ms the arc
-    is best, at 5 ms the parabolic blend: run at 2 sqrt(1000 0.001 / sin45) = 2.3784 mm/s."""
-    at4 = tangential(nc, turn(90.0, feed=20.0), slow_servo(0.004))
+    5 ms (G64 P0.001). The parabolic blend promises cos45 2 sqrt(900 0.001 / sin45) / 2 =
+    0.79776; the kink 20 0.1 / ((20 / T + 2000) / 2000) = 0.5714 (4 ms), 0.6667 (5 ms). At
+    4 ms the arc is best, at 5 ms the parabolic blend: run at 2 sqrt(1000 0.001 / sin45) =
+    2.3784 mm/s."""
+    at4 = tangential(nc, turn(90.0, feed=20.0, tol=0.001), slow_servo(0.004))
     assert at4.values["hold_mm"][0] > 0.0
     assert at4.values["acceleration_share"][0] == 1.0
-    at5 = tangential(nc, turn(90.0, feed=20.0), slow_servo(0.005))
+    at5 = tangential(nc, turn(90.0, feed=20.0, tol=0.001), slow_servo(0.005))
     assert at5.values["hold_mm"][0] == 0.0
     assert at5.values["acceleration_share"][0] == 0.5
     assert at5.feed[0] == pytest.approx(2.0 * math.sqrt(1000.0 * 0.001 / math.sin(math.pi / 4)))
@@ -267,3 +277,15 @@ def test_a_tangent_kink_takes_its_share_off_both_accelerations(nc):
     assert ind.values["acceleration_share"][0] == pytest.approx(1.0 - kink)
     prof = nc.predict(turn(0.1), Setup(machine=lcnc(), ramps=True)).profile
     assert prof.a_up[0] == pytest.approx(2000.0 * (1.0 - kink))
+
+
+def test_without_a_tolerance_a_blend_arc_deviates_a_quarter_of_the_shorter_segment(nc):
+    """G64 without P (tc.c tcFindBlendTolerance): the tolerance is a quarter of the shorter
+    segment, 10 / 4 = 2.5 mm at a 90 degree corner of 10 mm lines; the arc's tangent length
+    sin45 2.5 / (1 - cos45) = 6.04 mm is cut to half a segment, 5 mm: R = 5 / tan45 = 5 mm,
+    sqrt(2000 5) = 100 mm/s. With P0.01 the same corner: R = 0.0241421 mm, 6.95 mm/s."""
+    free = tangential(nc, turn(90.0, tol=None), lcnc())
+    assert free.values["radius_mm"][0] == pytest.approx(5.0)
+    assert free.feed[0] == pytest.approx(100.0)
+    tight = tangential(nc, turn(90.0), lcnc())
+    assert tight.values["radius_mm"][0] == pytest.approx(0.0241421, rel=1e-5)

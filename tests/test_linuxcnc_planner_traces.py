@@ -89,7 +89,8 @@ def predicted(prog: Path, servo_s: float = 0.001):
 def test_a_line_into_a_helix_and_out_of_it(tmp_path):
     """LinuxCNC runs both helix corners as parabolic blends: the lines and the helix at half
     their acceleration. Without that model the lines were 13 % short and the program 2.7 %
-    (the blind benchmark's thread milling, a program like this one)."""
+    (the blind benchmark's thread milling, a program like this one). Recorded 4.295 s;
+    predicted 4.279 s (with blend arcs at the helix: 4.248 s, -1.1 %)."""
     tr = record(tmp_path, "thread", THREAD)
     prof = predicted(tr["prog"])
     measured = float(tr["t"][-1] - tr["t"][0])
@@ -102,8 +103,9 @@ def test_a_line_into_a_helix_and_out_of_it(tmp_path):
 
 def test_corners_whose_arc_is_too_short_for_the_servo_period(tmp_path):
     """At a 5 ms servo period the 90 degree corners' blend arcs at 0.001 mm would run at
-    0.74 mm/s (their length per servo period); LinuxCNC blends them parabolically."""
+    0.74 mm/s (their length per servo period); LinuxCNC blends them parabolically. Recorded
+    1.275 s; predicted 1.277 s (with arcs, as before the choice was modelled: 1.261 s, -1.1 %)."""
     tr = record(tmp_path, "squares", SQUARES, servo_ns=5_000_000)
     prof = predicted(tr["prog"], servo_s=0.005)
     measured = float(tr["t"][-1] - tr["t"][0])
-    assert prof.cycle_time == pytest.approx(measured, rel=0.02)
+    assert prof.cycle_time == pytest.approx(measured, rel=0.005)

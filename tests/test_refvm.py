@@ -7,6 +7,7 @@ adapters) and the machines; the interpreter imports nothing of it.
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import subprocess
 import sys
@@ -375,9 +376,16 @@ def test_effects_table_is_consistent():
     ["fig1_polygons_F4000", "fig3_semicircle_spiral", "fig4_points_d1", "zlevel_cavity"],
 )
 def test_cycle_time_agrees_with_ncperf(nc, program, preset):
-    """Without effect the reference interpreter's cycle time is ncperf's prediction within 2 %."""
+    """Without effect the reference interpreter's cycle time is ncperf's prediction within 2 %.
+    The reference interpreter runs the paper's corners with the machine's TIT where the
+    program sets no tolerance; LinuxCNC has no machine tolerance (G64 without P: a quarter of
+    the shorter segment, which ncperf's linuxcnc-sim follows), so there both get the TIT as
+    G64 P."""
     m = load_preset(preset)
     tp = nc.extract(str(ROOT / "examples" / f"{program}.ngc"))
+    if preset == "linuxcnc-sim":
+        tol = np.where(np.isnan(tp.tolerance), m.path_tolerance, tp.tolerance)
+        tp = dataclasses.replace(tp, tolerance=tol)
     tr = simulate(tp, m)
     predicted = build_profile(nc.evaluate(tp, m)).cycle_time
     assert tr.cycle_time == pytest.approx(predicted, rel=0.02)
