@@ -99,12 +99,14 @@ class Ncperf:
         ``progress``, if given, is told each step as it starts (one short line)."""
         from core.engine.effects import setup_for
         from core.engine.profile import build_profile
+        from core.model.heap import release_free_heap
         from core.view.analysis import Analysis
         from core.view.annotations import build_annotations
 
         say = progress or (lambda _: None)
         say("reading the program")
         tp = machine_notes(self.extract(source, options), machine)
+        release_free_heap()  # the reader's holes (see core.model.heap)
         say(f"the models on {tp.n:,} moves")
         if machine.effects:
             # Effects the machine file switches on are part of its model (issue 5).
@@ -121,9 +123,11 @@ class Ncperf:
             tp.release_derived(keep=("tangent_start", "axis_share", "junctions"))
             ev = combine(tp, machine, indicators)
             del indicators
+            release_free_heap()
             say(f"the feed profile of {tp.n:,} moves")
             profile = build_profile(ev, release_directions=True)
         tp.release_derived()  # the models are done with them; the peak is in what follows
+        release_free_heap()
         say("zones and colour classes")
         return Analysis(tp, ev, profile, build_annotations(ev, profile))
 

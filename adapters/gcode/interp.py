@@ -245,20 +245,22 @@ class Interpreter:
         self._modal()
         self._axes()
         self._check_words()
-        self._release_words()
+        self._release_per_line()
         return self._build()
 
     def _release_words(self) -> None:
-        """Let the word arrays go (1M lines: 50 MB) before the columns are built: what
-        follows reads the per-line arrays."""
+        """Let the word arrays go once every letter's values are per line (in _axes): what
+        follows reads the per-line arrays (5M lines of arcs: 25M words, 430 MB off the
+        reader's peak)."""
         w = self.w
-        # Empty copies, not views: an empty view keeps its whole base array alive. (The
-        # values went once read, in _axes.)
+        # Empty copies, not views: an empty view keeps its whole base array alive.
         w.line, w.letter = w.line[:0].copy(), w.letter[:0].copy()
-        w.bare = w.bare[:0].copy()
+        w.value, w.bare = w.value[:0].copy(), w.bare[:0].copy()
         del self.li
-        # So do the per-line values the positions were made of, and the G-code groups but
-        # the two the columns read (1M lines: another 70 MB).
+
+    def _release_per_line(self) -> None:
+        """Let the per-line values the positions were made of go, and the G-code groups
+        but the two the columns read (1M lines: 70 MB), before the columns are built."""
         for ch in "XYZQ":
             self.vals.pop(ch, None)
             self.pres.pop(ch, None)
@@ -505,7 +507,10 @@ class Interpreter:
         # are worked out (1M lines of arcs: 38 MB), once the decimal-point notice, which
         # quotes one, is made (it is added where it always was: the notices keep their order).
         self._bare_notice = self._decimal_point_args() if self.dialect == "fanuc" else None
-        self.w.value = self.w.value[:0].copy()  # (a copy: an empty view keeps its base)
+        self._o_word_line = self._o_word_mixed()
+        # (the S words' lines: a Siemens G4 S is refused in _dwells)
+        self._s_lines = self.w.line[self.w.letter == ord("S")]
+        self._release_words()
 
         dwell_line = gg[G.DWELL] >= 0
         self.dwell_time = np.broadcast_to(0.0, (self.na,))  # read only; _dwells sets it
@@ -609,7 +614,7 @@ class Interpreter:
             self.consumed["X"] = dwell_line & p["X"]
             self.consumed["P"] = dwell_line & p["P"]
         else:  # siemens: G4 F (s); G4 S is in spindle revolutions
-            s_lines = self.w.line[self.w.letter == ord("S")]
+            s_lines = self._s_lines
             if np.isin(al[dwell_line], s_lines).any():
                 k = np.flatnonzero(dwell_line)[np.isin(al[dwell_line], s_lines)][0]
                 raise self.error(al[k], "G4 S (dwell in spindle revolutions) is not supported")
@@ -651,16 +656,22 @@ class Interpreter:
                 "predicts every block",
                 int(al[np.argmax(merge)]),
             )
+        if self._o_word_line is not None:
+            raise self.error(
+                self._o_word_line,
+                "O word with other words in the block (subprograms are not "
+                "supported; a program number stands alone)",
+            )
+
+    def _o_word_mixed(self) -> int | None:
+        """The first line's word on a block with an O word and other words (other than N),
+        if any: found while the words are at hand, reported by :meth:`_check_words`."""
         o = self.w.letter == ord("O")
-        if o.any():
-            lines_o = self.li[o]
-            others = np.isin(self.li, lines_o) & ~np.isin(self.w.letter, [ord("O"), ord("N")])
-            if others.any():
-                raise self.error(
-                    self.w.line[np.argmax(others)],
-                    "O word with other words in the block (subprograms are not "
-                    "supported; a program number stands alone)",
-                )
+        if not o.any():
+            return None
+        lines_o = self.li[o]
+        others = np.isin(self.li, lines_o) & ~np.isin(self.w.letter, [ord("O"), ord("N")])
+        return int(self.w.line[np.argmax(others)]) if others.any() else None
 
     # ------------------------------------------------------------------ build
     def _build(self) -> ToolPath:

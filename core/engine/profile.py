@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
+from core.model.heap import release_free_heap
 from core.model.pieces import pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
@@ -882,7 +883,8 @@ class _Rounds:
         ``at`` (whole columns when every move is in a ramp), no chain gathered."""
         if start.all():
             first = last = at
-            after_first = after_last = idx + 1
+            # (every move: the next moves' marks are a view, not gathered)
+            after_first = after_last = slice(1, None) if isinstance(at, slice) else idx + 1
             chain = None
         else:
             chain = np.cumsum(start) - 1
@@ -899,8 +901,8 @@ class _Rounds:
         else:
             hi = np.where(through[after_first], v0[first], peak[first])
             lo = v1[last]
-        dv = hi - lo
-        return dv if chain is None else dv[chain]
+        hi -= lo  # the speed changes (in place: one (n,) array fewer at the profile's peak)
+        return hi if chain is None else hi[chain]
 
     def _direction(self, rising, phase, through, v0, v1, peak) -> float:
         """The next accelerations of one direction (updated in place, with the passes' terms
@@ -1159,6 +1161,7 @@ def build_profile(
     del holds
     v0, peak, v1, time, d_cr = speeds
     del speeds
+    release_free_heap()  # the rounds' holes (5M arcs: 100 MB; see core.model.heap)
     if jerk_limited:
         marks = _ramp_marks(v0, peak, v1, d_cr)
         del d_cr

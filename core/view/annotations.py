@@ -16,6 +16,8 @@ from numpy.typing import NDArray
 
 from core.engine.indicators import REDUCTION_LABELS, Evaluation, reduction_class
 from core.engine.profile import Profile, build_profile
+from core.model.heap import release_free_heap
+from core.model.pieces import piecewise
 from core.model.toolpath import ToolPath
 from core.view.zones import Zone, find_zones
 
@@ -113,11 +115,14 @@ def check_drawable(tp: ToolPath) -> None:
 def length_class(ev: Evaluation) -> NDArray[np.int8]:
     """(n,) Figure-10 class of each block: 0 below L, 1 from L to 2 L, 2 above; -1 rapids."""
     tp = ev.toolpath
-    ratio = tp.length / ev.min_length
-    cls = np.searchsorted(
-        np.array([1.0, 2.0]), np.nan_to_num(ratio, nan=np.inf), side="right"
-    ).astype(np.int8)
-    return np.where(tp.is_feed, cls, -1).astype(np.int8)
+    edges = np.array([1.0, 2.0])
+
+    def cls(b: slice) -> NDArray[np.int8]:
+        ratio = tp.length[b] / ev.min_length[b]
+        c = np.searchsorted(edges, np.nan_to_num(ratio, nan=np.inf), side="right")
+        return np.where(tp.is_feed[b], c.astype(np.int8), -1).astype(np.int8)
+
+    return piecewise(tp.n, np.int8, cls)  # (in pieces: no (n,) temporaries)
 
 
 def speed_share(
@@ -126,15 +131,25 @@ def speed_share(
     """Mean predicted speed of moves ``k`` (all by default) over their programmed feed
     (length / time / F); NaN for rapids. A move the profile runs at F has share 1."""
     tp = profile.toolpath
-    with np.errstate(invalid="ignore", divide="ignore"):
-        share = tp.length[k] / (profile.time[k] * tp.feed[k])
-    return np.where(tp.is_feed[k], np.minimum(share, 1.0), np.nan)
+
+    def f(m: NDArray[np.int64] | slice) -> NDArray[np.float64]:
+        with np.errstate(invalid="ignore", divide="ignore"):
+            share = tp.length[m] / (profile.time[m] * tp.feed[m])
+        return np.where(tp.is_feed[m], np.minimum(share, 1.0), np.nan)
+
+    if isinstance(k, slice) and k == slice(None):  # all moves: in pieces, no temporaries
+        return piecewise(tp.n, np.float64, f)
+    return f(k)
 
 
 def speed_class(share: NDArray[np.floating], is_feed: NDArray[np.bool_]) -> NDArray[np.int8]:
     """Reduction class 0..5 of ``1 - share`` (a :func:`speed_share`), -1 for rapids."""
-    cls = reduction_class(1.0 - np.nan_to_num(share, nan=1.0))
-    return np.where(is_feed, cls, -1).astype(np.int8)
+
+    def f(b: slice) -> NDArray[np.int8]:
+        cls = reduction_class(1.0 - np.nan_to_num(share[b], nan=1.0))
+        return np.where(is_feed[b], cls, -1).astype(np.int8)
+
+    return piecewise(share.shape[0], np.int8, f)  # (in pieces: no (n,) temporaries)
 
 
 def build_annotations(
@@ -145,7 +160,13 @@ def build_annotations(
     if profile is None:
         profile = build_profile(ev)
     worst = find_zones(ev, profile, zones)  # first: its peak is the stage's (1M moves)
-    mc = np.where(tp.is_feed, reduction_class(np.nan_to_num(ev.element_reduction)), -1)
+    release_free_heap()  # its holes (5M arcs: 100 MB; see core.model.heap)
+    er, feed = ev.element_reduction, tp.is_feed
+    mc = piecewise(  # (in pieces: no (n,) temporaries)
+        tp.n,
+        np.int8,
+        lambda b: np.where(feed[b], reduction_class(np.nan_to_num(er[b])), -1),
+    )
     share = speed_share(profile)
     counts = []
     for k in range(len(ev.indicator_names)):
@@ -155,7 +176,7 @@ def build_annotations(
     return Annotations(
         title=tp.source,
         machine=ev.machine.name,
-        move_class=mc.astype(np.int8),
+        move_class=mc,
         junction=ev.junction,
         junction_class=reduction_class(ev.junction_reduction),
         junction_feed=ev.junction_feed,

@@ -3,6 +3,7 @@ programmed feed around slow points, ranked by the time they lose against length 
 
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
@@ -10,7 +11,7 @@ from numpy.typing import NDArray
 
 from core.engine.indicators import Evaluation
 from core.engine.profile import Profile
-from core.model.pieces import piecewise
+from core.model.pieces import pieces
 
 #: A junction or block is a slow point of a zone when its predicted feed is at least
 #: this much below the programmed feed (the paper's green class ends at 10 %).
@@ -103,38 +104,76 @@ def find_zones(ev: Evaluation, profile: Profile, count: int = 10) -> tuple[Zone,
     return _zones(ev, profile, count)
 
 
-def _worst_points(zone: NDArray[np.int64], ratio: NDArray[np.float64], n_z: int) -> NDArray:
+#: A run of points: how many pieces of what it is made of (junctions, moves) there are,
+#: and the points of piece ``b``: their ids, zones (non-decreasing over the run) and ratios.
+_Run = tuple[
+    int, Callable[[slice], tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]]
+]
+
+
+def _worst_points(
+    zone: NDArray[np.int64], ratio: NDArray[np.float64], n_z: int, split: int | None = None
+) -> NDArray:
     """Per zone, the point of lowest ``ratio`` (the first such point on a tie; NaN above
     every number), -1 for a zone without points: the head of each zone in
-    ``np.lexsort((ratio, zone))``, without sorting the ratios (stellabee1: 47 -> 11 ms).
+    ``np.lexsort((ratio, zone))``, without sorting.
 
-    ``zone`` is two non-decreasing runs (the junctions', the blocks'), which a stable sort
-    merges in one pass; within a zone the points then keep their order. Past the sort's
-    order, the (p,) work is done in pieces: this is the annotations' peak.
+    ``zone`` is two non-decreasing runs (the junctions', the blocks'; the second starts at
+    ``split``, found where ``zone`` steps down if not given); see :func:`_worst_of_runs`.
+    """
+    p = zone.size
+    if split is None:
+        down = np.flatnonzero(zone[1:] < zone[:-1])
+        split = int(down[0]) + 1 if down.size else p
+
+    def run(lo: int, hi: int) -> _Run:
+        z, r = zone[lo:hi], ratio[lo:hi]
+        return hi - lo, lambda b: (np.arange(lo + b.start, lo + b.stop), z[b], r[b])
+
+    return _worst_of_runs((run(0, split), run(split, p)), n_z)[0]
+
+
+def _worst_of_runs(
+    runs: tuple[_Run, ...], n_z: int
+) -> tuple[NDArray[np.int64], NDArray[np.int8], list[NDArray[np.int64]]]:
+    """The worst point of each zone (:func:`_worst_points`) of the points of ``runs`` one
+    after the other, each run's points given piece by piece (no (p,) array of them is
+    made: 5M arcs, 10M points, once the annotations' peak): its id (-1: none) and run, and
+    each run's count of points per zone.
+
+    A stable sort by zone would merge the runs, each zone's points of the first run before
+    those of the second, in their order: so each zone's lowest ratio is the lowest of the
+    runs' (reductions over their sorted zones), and its worst point the first point with
+    it in the first run, else in the second.
     """
     worst = np.full(n_z, -1, dtype=np.int64)
-    p = zone.size
-    if p == 0:
-        return worst
-    order = np.argsort(zone, kind="stable")
-    # where each zone's points start in that order
-    change = piecewise(
-        p - 1, bool, lambda b: zone[order[b.start + 1 : b.stop + 1]] != zone[order[b]]
-    )
-    first = np.concatenate([[0], np.flatnonzero(change) + 1])
-    del change
-    low = np.fmin.reduceat(ratio[order], first)  # NaN only where all of a zone's ratios are
-
-    def lowest(b: slice) -> NDArray[np.bool_]:
-        seg = np.searchsorted(first, np.arange(b.start, b.stop), side="right") - 1
-        r, lo = ratio[order[b]], low[seg]
-        return (r == lo) | (np.isnan(lo) & np.isnan(r))
-
-    k = np.flatnonzero(piecewise(p, bool, lowest))
-    seg = np.searchsorted(first, k, side="right") - 1  # the zone (rank) of each
-    head = k[np.concatenate([[True], seg[1:] != seg[:-1]])]
-    worst[zone[order[head]]] = order[head]
-    return worst
+    which = np.full(n_z, -1, dtype=np.int8)
+    low = np.full(n_z, np.nan)
+    counts = []
+    for size, get in runs:
+        count = np.zeros(n_z, dtype=np.int64)
+        for b in pieces(size):
+            _, zb, rb = get(b)
+            if zb.size == 0:
+                continue
+            np.add.at(count, zb, 1)
+            first = np.flatnonzero(np.concatenate([[True], zb[1:] != zb[:-1]]))
+            z = zb[first]
+            low[z] = np.fmin(low[z], np.fmin.reduceat(rb, first))  # NaN only if all are
+        counts.append(count)
+    for r, (size, get) in enumerate(runs):  # in order, each in pieces in order: the
+        for b in pieces(size):  # first point claims
+            ids, zb, rb = get(b)
+            lo = low[zb]
+            k = np.flatnonzero((rb == lo) | (np.isnan(lo) & np.isnan(rb)))
+            zk = zb[k]
+            head = np.ones(k.size, dtype=bool)
+            head[1:] = zk[1:] != zk[:-1]
+            k, zk = k[head], zk[head]
+            free = worst[zk] < 0
+            worst[zk[free]] = ids[k[free]]
+            which[zk[free]] = r
+    return worst, which, counts
 
 
 def _zones(ev: Evaluation, profile: Profile, count: int | None):
@@ -163,13 +202,18 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     # Inner moves are feed moves: their Profile.lost_time, without its (n,) array. The sums
     # are float64 whatever the count: a bincount over no moves is int64, and np.add.at
     # below would truncate every lone corner's fractions into it.
-    ii = np.flatnonzero(inner)
-    zi, len_i = zone_of[ii], tp.length[ii]
-    with np.errstate(invalid="ignore"):
-        lost_i = profile.time[ii] - len_i / tp.feed[ii]
-    lost = np.bincount(zi, weights=lost_i, minlength=n_z).astype(np.float64, copy=False)
-    length = np.bincount(zi, weights=len_i, minlength=n_z).astype(np.float64, copy=False)
-    del ii, zi, len_i, lost_i, inner
+    # In pieces, each added in the order of the moves as one bincount would (np.add.at adds
+    # one by one, in order: the same sums; 5M moves, 270 MB of temporaries less).
+    lost, length = np.zeros(n_z), np.zeros(n_z)
+    for piece in pieces(tp.n):
+        ii = np.flatnonzero(inner[piece])
+        ii += piece.start
+        zi, len_i = zone_of[ii], tp.length[ii]
+        with np.errstate(invalid="ignore"):
+            lost_i = profile.time[ii] - len_i / tp.feed[ii]
+        np.add.at(lost, zi, lost_i)
+        np.add.at(length, zi, len_i)
+    del inner
     # Breaks: their accelerating start ends zone m, their braking end opens zone m + 1.
     m = np.arange(brk.size)
     np.add.at(lost, m, lost_up)
@@ -181,47 +225,40 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
     first = np.concatenate([[0], brk])
     last = np.concatenate([brk, [tp.n - 1]])
 
-    # Slow points of the evaluation, each with its zone.
-    jsel = np.flatnonzero(ev.junction_reduction >= ZONE_THRESHOLD)
-    esel = np.flatnonzero(feed & (np.nan_to_num(ev.element_reduction) >= ZONE_THRESHOLD))
-    n_js = jsel.size  # points [0, n_js) are junctions, the rest blocks
-    # Zone and feed ratio of each point, written in place (no per-kind copies to join: 5M
-    # arcs, 120 MB off the peak): a junction after a break is in the zone the break opens.
-    pt_zone = np.empty(n_js + esel.size, dtype=np.int64)
-    jm = ev.junction[jsel]
-    j_zone = pt_zone[:n_js]
-    np.take(zone_of, jm, out=j_zone)
-    j_zone += fast[jm]
-    del jm
-    np.add(zone_of[esel], fast[esel], out=pt_zone[n_js:])
-    del zone_of  # the sort below is the peak
-    ratio = np.empty(pt_zone.size)
-    np.divide(ev.junction_feed[jsel], ev.junction_programmed[jsel], out=ratio[:n_js])
-    np.divide(ev.element_feed[esel], tp.feed[esel], out=ratio[n_js:])
-    points = np.bincount(pt_zone, minlength=n_z)
-    n_j = np.bincount(j_zone, minlength=n_z)
-    # (the junctions' indices are found again for the zones listed: the sort is the peak)
-    del j_zone, jsel
-    worst = _worst_points(pt_zone, ratio, n_z)
-    del pt_zone, ratio
+    # Slow points of the evaluation, each with its zone and feed ratio, piece by piece (no
+    # arrays of them: 5M arcs, 10M points, 300 MB off the peak): a junction after a break
+    # is in the zone the break opens.
+    jr, er = ev.junction_reduction, ev.element_reduction
+
+    def j_points(b: slice) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+        js = np.flatnonzero(jr[b] >= ZONE_THRESHOLD)
+        js += b.start
+        jm = ev.junction[js]
+        return js, zone_of[jm] + fast[jm], ev.junction_feed[js] / ev.junction_programmed[js]
+
+    def e_points(b: slice) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
+        es = np.flatnonzero(feed[b] & (np.nan_to_num(er[b]) >= ZONE_THRESHOLD))
+        es += b.start
+        return es, zone_of[es] + fast[es], ev.element_feed[es] / tp.feed[es]
+
+    worst, which, (n_j, n_e) = _worst_of_runs(((jr.size, j_points), (tp.n, e_points)), n_z)
+    points = n_j + n_e
 
     candidates = np.flatnonzero(points > 0)
     if count is None:
         return len(candidates)
-    jsel = np.flatnonzero(ev.junction_reduction >= ZONE_THRESHOLD)
     top = candidates[np.argsort(-lost[candidates], kind="stable")[:count]]
     zones = []
     for rank, z in enumerate(top, start=1):
-        k = int(worst[z])
-        if k < n_js:
-            q = int(jsel[k])
+        if which[z] == 0:  # a junction's
+            q = int(worst[z])
             cause = (
                 f"{ev.indicator_names[ev.junction_indicator[q]]}: {ev.labels[ev.junction_limit[q]]}"
             )
             min_feed, prog = float(ev.junction_feed[q]), float(ev.junction_programmed[q])
             point = tp.end[ev.junction[q]]
-        else:
-            i = int(esel[k - jsel.size])
+        else:  # a block's
+            i = int(worst[z])
             cause = (
                 f"{ev.indicator_names[ev.element_indicator[i]]}: {ev.labels[ev.element_limit[i]]}"
             )
