@@ -1161,7 +1161,8 @@ def build_profile(
     del holds
     v0, peak, v1, time, d_cr = speeds
     del speeds
-    release_free_heap()  # the rounds' holes (5M arcs: 100 MB; see core.model.heap)
+    if release_directions:  # a single analysis (not the many profiles of a fit)
+        release_free_heap()  # the rounds' holes (5M arcs: 100 MB; see core.model.heap)
     if jerk_limited:
         marks = _ramp_marks(v0, peak, v1, d_cr)
         del d_cr
