@@ -18,9 +18,13 @@ from core.diagnosis.objective import FEED, Objective
 from core.diagnosis.rules import GRID_1D, GRID_2D, GRID_ND, REFINE
 from core.engine.effects import Effect, Param, Setup
 from core.engine.indicators import IndicatorSource
-from core.engine.predict import Prediction, predict
+from core.engine.predict import Prediction, predict, retimed, same_plan
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
+
+#: Plans (evaluations and profiles) a fit keeps for candidates that only change the
+#: time-domain filters (servo lag, setpoint filter).
+PLANS = 2
 
 
 def grid(p: Param, count: int) -> NDArray[np.float64]:
@@ -34,10 +38,24 @@ def grid(p: Param, count: int) -> NDArray[np.float64]:
 
 
 def predict_all(
-    indicators_of: IndicatorSource, tps: Sequence[ToolPath], setup: Setup
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    setup: Setup,
+    plans: list[tuple[Setup, list[Prediction]]] | None = None,
 ) -> list[Prediction]:
-    """The prediction of ``setup`` for every program."""
-    return [predict(indicators_of, tp, setup) for tp in tps]
+    """The prediction of ``setup`` for every program. ``plans``: predictions made before
+    (most recent last, kept to PLANS); one of a setup that plans alike (differs in the
+    time-domain filters only) gives its evaluations and profiles, and this one is added."""
+    if plans is not None:
+        for k in range(len(plans) - 1, -1, -1):
+            setup_k, preds_k = plans[k]
+            if same_plan(setup_k, setup):
+                return [retimed(p, setup) for p in preds_k]
+    preds = [predict(indicators_of, tp, setup) for tp in tps]
+    if plans is not None:
+        plans.append((setup, preds))
+        del plans[:-PLANS]
+    return preds
 
 
 def fit(
@@ -54,11 +72,12 @@ def fit(
     m = base.machine
     defaults = eff.start(m)
     cache: dict[tuple, tuple[float, list[Prediction]]] = {}
+    plans: list[tuple[Setup, list[Prediction]]] = []
 
     def score(values: dict[str, float]) -> float:
         key = tuple(round(values[p.name], 12) for p in eff.params)
         if key not in cache:
-            preds = predict_all(indicators_of, tps, eff.apply(base, values))
+            preds = predict_all(indicators_of, tps, eff.apply(base, values), plans)
             cache[key] = (objective.gap(preds, data, "calibration"), preds)
         return cache[key][0]
 

@@ -8,6 +8,7 @@ to find where a point lies on the path.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,6 +21,8 @@ from core.model.tolerances import TOL
 PROJECTION_STEP = 0.05
 #: Rows per block when projecting (bounded temporaries: rows x window x 3 floats).
 PROJECT_BLOCK = 8192
+#: Rows per block of :meth:`PathSamples.project_near` (a few (rows,) temporaries per offset).
+NEAR_BLOCK = 65536
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,6 +44,11 @@ class PathSamples:
     s: NDArray[np.float64]
     move: NDArray[np.int64]
     step: float
+
+    @cached_property
+    def _columns(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """x, y and z of the points, each contiguous."""
+        return tuple(np.ascontiguousarray(self.points[:, j]) for j in range(3))  # type: ignore[return-value]
 
     def project_near(
         self, q: ArrayLike, s_guess: ArrayLike, half_width: float = 1.0
@@ -66,8 +74,52 @@ class PathSamples:
             raise ValueError(
                 f"q must have shape (m, 3) and s_guess (m,), got {q.shape} and {s_guess.shape}"
             )
+        s_p = self.s
+        half = int(half_width / self.step)
+        if not (np.isfinite(q).all() and np.isfinite(s_guess).all()):
+            return self._project_near_gathered(q, s_guess, half)
+        # Offset by offset over the window of candidates, keeping the first nearest (as an
+        # argmin over the window would): no (rows, window, 3) temporaries.
+        px, py, pz = self._columns
+        last = s_p.size - 1
+        s = np.empty(q.shape[0])
+        dist = np.empty(q.shape[0])
+        for c in range(0, q.shape[0], NEAR_BLOCK):
+            part = slice(c, c + NEAR_BLOCK)
+            qx, qy, qz = q[part, 0], q[part, 1], q[part, 2]
+            guess = s_guess[part]
+            j = np.searchsorted(s_p, guess)
+            best_key = best_d2 = np.empty(0)
+            best_i = np.empty(0, dtype=np.int64)
+            for off in range(-half, half + 1):
+                cand = np.clip(j + off, 0, last)
+                dx = px[cand] - qx
+                dy = py[cand] - qy
+                dz = pz[cand] - qz
+                # (the order of the sum the gathered einsum takes: the same values)
+                d2 = (dx * dx + dz * dz) + dy * dy
+                # Points of two passes of the path that coincide (a plunge down the
+                # retract): the one nearer the guess along the path.
+                ds = s_p[cand] - guess
+                key = d2 + (TOL.pass_tie * ds) ** 2
+                if off == -half:
+                    best_key, best_d2, best_i = key, d2, cand
+                    continue
+                better = key < best_key
+                best_key[better] = key[better]
+                best_d2[better] = d2[better]
+                best_i[better] = cand[better]
+            s[part] = s_p[best_i]
+            dist[part] = np.sqrt(best_d2)
+        return s, dist
+
+    def _project_near_gathered(
+        self, q: NDArray[np.float64], s_guess: NDArray[np.float64], half: int
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`project_near` over the whole window at once (argmin's NaN rules: used
+        where a point or a guess is not finite)."""
         pts, s_p = self.points, self.s
-        k_off = np.arange(-int(half_width / self.step), int(half_width / self.step) + 1)
+        k_off = np.arange(-half, half + 1)
         s = np.empty(q.shape[0])
         dist = np.empty(q.shape[0])
         for c in range(0, q.shape[0], PROJECT_BLOCK):
@@ -76,8 +128,6 @@ class PathSamples:
             cand = np.clip(j[:, None] + k_off[None, :], 0, s_p.size - 1)
             diff = pts[cand] - q[part][:, None, :]
             d2 = np.einsum("mkj,mkj->mk", diff, diff)
-            # Points of two passes of the path that coincide (a plunge down the retract):
-            # the one nearer the guess along the path.
             ds = s_p[cand] - s_guess[part][:, None]
             best = np.argmin(d2 + (TOL.pass_tie * ds) ** 2, axis=1)
             rows = np.arange(best.size)
