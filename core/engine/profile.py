@@ -154,6 +154,59 @@ def s_curve_big_g(p: ArrayLike, shape: tuple[NDArray, ...]) -> NDArray[np.float6
     )
 
 
+def _bisect_ramp(
+    lo: NDArray,
+    dv: NDArray,
+    a: NDArray,
+    vb2: NDArray,
+    span: NDArray,
+    shape: tuple[NDArray, ...],
+    goal: NDArray,
+    rising: bool,
+) -> tuple[NDArray, NDArray]:
+    """The bracket (a_p, b_p) of the share p of a jerk-limited ramp where it is at the place
+    ``goal`` (:meth:`Profile.speed_at`): 26 halvings (p to 1.5e-8 of the ramp) of where
+
+        x(p) = (v(p)^2 - vb2) / (2 a) + span (G(p) - p^2 / 2),  v(p) = lo + p dv rising,
+        lo + (1 - p) dv braking (x negated), G = :func:`s_curve_big_g`,
+
+    is below ``goal``. The same operations on every element as evaluating those formulas
+    array-wide (the terms that do not change with p computed once), each branch of G only
+    where it applies."""
+    r, c, rs = shape
+    six_rs = 6 * rs
+    inner0 = c * r * r / 6
+    rr = r * r
+    half_r = 0.5 * r
+    one_r = 1.0 - r
+    two_a = 2 * a
+    a_p, b_p = np.zeros(lo.size), np.ones(lo.size)
+    big_g = np.empty(lo.size)
+    for _ in range(26):
+        p = 0.5 * (a_p + b_p)
+        vt = lo + p * dv if rising else lo + (1.0 - p) * dv
+        q = 1.0 - p
+        first = p < r
+        last = ~first & (p > one_r)
+        mid = ~(first | last)
+        i = np.flatnonzero(first)
+        if i.size:
+            big_g[i] = c[i] * p[i] ** 3 / six_rs[i]
+        i = np.flatnonzero(last)
+        if i.size:
+            qi = q[i]
+            big_g[i] = 0.5 - qi + c[i] * qi**3 / six_rs[i]
+        i = np.flatnonzero(mid)
+        if i.size:
+            pi, ri = p[i], r[i]
+            big_g[i] = inner0[i] + c[i] * (0.5 * (pi * pi - rr[i]) - half_r[i] * (pi - ri))
+        x = (vt * vt - vb2) / two_a + span * (big_g - 0.5 * p * p)
+        below = (x < goal) if rising else (-x < goal)
+        a_p = np.where(below, p, a_p)
+        b_p = np.where(below, b_p, p)
+    return a_p, b_p
+
+
 def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[NDArray, NDArray]:
     """(n,) tangential acceleration and jerk of each move: min_k limit_k / share_k."""
     share = tp.axis_share
@@ -347,21 +400,8 @@ class Profile:
             target = into[sel] if rising else rest[sel]
             span = dv * dv / a  # dv * T, T = dv / a the ramp's duration
             shape = s_curve_shape(dv, acc[kk], jerk[kk])  # once, not per bisection step
-            vb2 = vb * vb
-
-            def place(p, lo=lo, dv=dv, a=a, vb2=vb2, span=span, shape=shape, rising=rising):
-                vt = lo + p * dv if rising else lo + (1.0 - p) * dv
-                big_g = s_curve_big_g(p, shape)
-                x = (vt * vt - vb2) / (2 * a) + span * (big_g - 0.5 * p * p)
-                return x if rising else -x  # increasing in p either way
-
-            a_p, b_p = np.zeros(sel.size), np.ones(sel.size)
             goal = target if rising else -target
-            for _ in range(26):  # p to 1.5e-8 of the ramp
-                mid = 0.5 * (a_p + b_p)
-                below = place(mid) < goal
-                a_p = np.where(below, mid, a_p)
-                b_p = np.where(below, b_p, mid)
+            a_p, b_p = _bisect_ramp(lo, dv, a, vb * vb, span, shape, goal, rising)
             g_share = s_curve_g(0.5 * (a_p + b_p), shape)
             v[sel] = lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
         return v
