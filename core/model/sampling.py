@@ -23,6 +23,10 @@ PROJECTION_STEP = 0.05
 PROJECT_BLOCK = 8192
 #: Rows per block of :meth:`PathSamples.project_near` (a few (rows,) temporaries per offset).
 NEAR_BLOCK = 65536
+#: :meth:`PathSamples.project_near` looks at every COARSE-th candidate first; NEAR_SLACK (mm)
+#: covers the rounding of the distances it compares.
+COARSE = 5
+NEAR_SLACK = 1e-9
 
 
 @dataclass(frozen=True, eq=False)
@@ -78,10 +82,16 @@ class PathSamples:
         half = int(half_width / self.step)
         if not (np.isfinite(q).all() and np.isfinite(s_guess).all()):
             return self._project_near_gathered(q, s_guess, half)
-        # Offset by offset over the window of candidates, keeping the first nearest (as an
-        # argmin over the window would): no (rows, window, 3) temporaries.
-        px, py, pz = self._columns
+        # Every COARSE-th offset of the window for all points, then the offsets between two
+        # of them only for the points they might be nearer for: by the triangle inequality
+        # none of them is nearer than half (sum of the two distances - the path length
+        # between the two points). Ties go to the earlier offset, as an argmin over the
+        # whole window would: the same point as before.
         last = s_p.size - 1
+        coarse = list(range(-half, half + 1, COARSE))
+        if coarse[-1] != half:
+            coarse.append(half)
+        reach = self._reach
         s = np.empty(q.shape[0])
         dist = np.empty(q.shape[0])
         for c in range(0, q.shape[0], NEAR_BLOCK):
@@ -91,17 +101,12 @@ class PathSamples:
             j = np.searchsorted(s_p, guess)
             best_key = best_d2 = np.empty(0)
             best_i = np.empty(0, dtype=np.int64)
-            for off in range(-half, half + 1):
+            best_o = np.full(j.size, -half)
+            seen = []
+            for off in coarse:
                 cand = np.clip(j + off, 0, last)
-                dx = px[cand] - qx
-                dy = py[cand] - qy
-                dz = pz[cand] - qz
-                # (the order of the sum the gathered einsum takes: the same values)
-                d2 = (dx * dx + dz * dz) + dy * dy
-                # Points of two passes of the path that coincide (a plunge down the
-                # retract): the one nearer the guess along the path.
-                ds = s_p[cand] - guess
-                key = d2 + (TOL.pass_tie * ds) ** 2
+                key, d2 = self._key(cand, qx, qy, qz, guess)
+                seen.append((cand, np.sqrt(d2)))
                 if off == -half:
                     best_key, best_d2, best_i = key, d2, cand
                     continue
@@ -109,9 +114,61 @@ class PathSamples:
                 best_key[better] = key[better]
                 best_d2[better] = d2[better]
                 best_i[better] = cand[better]
+                best_o[better] = off
+            for (o1, o2), (c1, d1), (_, d2) in zip(
+                zip(coarse[:-1], coarse[1:], strict=True), seen[:-1], seen[1:], strict=True
+            ):
+                if o2 - o1 < 2:
+                    continue
+                low = 0.5 * (d1 + d2 - reach[c1]) - NEAR_SLACK
+                rows = np.flatnonzero(~((low > 0) & (low * low > best_key)))
+                if rows.size == 0:
+                    continue
+                jr, qxr, qyr, qzr, gr = j[rows], qx[rows], qy[rows], qz[rows], guess[rows]
+                for off in range(o1 + 1, o2):
+                    cand = np.clip(jr + off, 0, last)
+                    key, d2r = self._key(cand, qxr, qyr, qzr, gr)
+                    bk = best_key[rows]
+                    better = (key < bk) | ((key == bk) & (off < best_o[rows]))
+                    r = rows[better]
+                    best_key[r] = key[better]
+                    best_d2[r] = d2r[better]
+                    best_i[r] = cand[better]
+                    best_o[r] = off
             s[part] = s_p[best_i]
             dist[part] = np.sqrt(best_d2)
         return s, dist
+
+    def _key(
+        self,
+        cand: NDArray[np.int64],
+        qx: NDArray[np.float64],
+        qy: NDArray[np.float64],
+        qz: NDArray[np.float64],
+        guess: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """What :meth:`project_near` minimises for the points ``cand`` (squared distance
+        plus the pass tie-break), and the squared distance."""
+        px, py, pz = self._columns
+        dx = px[cand] - qx
+        dy = py[cand] - qy
+        dz = pz[cand] - qz
+        # (the order of the sum the gathered einsum takes: the same values)
+        d2 = (dx * dx + dz * dz) + dy * dy
+        # Points of two passes of the path that coincide (a plunge down the retract): the
+        # one nearer the guess along the path.
+        return d2 + (TOL.pass_tie * (self.s[cand] - guess)) ** 2, d2
+
+    @cached_property
+    def _reach(self) -> NDArray[np.float64]:
+        """(p,) the length of the polyline through points i .. i + COARSE (at least the
+        distance from point i to any of them)."""
+        seg = np.sqrt(np.sum(np.diff(self.points, axis=0) ** 2, axis=1))
+        seg = np.concatenate([seg, np.zeros(COARSE)])
+        out = np.zeros(self.points.shape[0])
+        for k in range(COARSE):
+            out += seg[k : k + out.size]
+        return out * (1.0 + 1e-12)
 
     def _project_near_gathered(
         self, q: NDArray[np.float64], s_guess: NDArray[np.float64], half: int
