@@ -113,10 +113,18 @@ def _nearest(
     With ``s_p`` (k,) and ``s_exp`` (m,), points equally near are told apart by how close
     their arc length is to the expected one (a penalty of TOL.sequence_tie mm per mm of arc length).
     """
-    d2 = np.einsum("ij,ij->i", q, q)[:, None] - 2 * q @ p.T + np.einsum("ij,ij->i", p, p)[None, :]
-    d2 = np.maximum(d2, 0.0)
+    # |q|^2 - 2 q.p + |p|^2, floored at 0, in place (the same operations in the same order)
+    d2 = q @ p.T
+    np.multiply(d2, 2, out=d2)
+    np.subtract(np.einsum("ij,ij->i", q, q)[:, None], d2, out=d2)
+    np.add(d2, np.einsum("ij,ij->i", p, p)[None, :], out=d2)
+    np.maximum(d2, 0.0, out=d2)
     if s_p is not None and s_exp is not None:
-        k = np.argmin(d2 + (TOL.sequence_tie * (s_p[None, :] - s_exp[:, None])) ** 2, axis=1)
+        key = np.subtract(s_p[None, :], s_exp[:, None])
+        np.multiply(key, TOL.sequence_tie, out=key)
+        np.square(key, out=key)
+        np.add(d2, key, out=key)
+        k = np.argmin(key, axis=1)
     else:
         k = np.argmin(d2, axis=1)
     return k, np.sqrt(d2[np.arange(q.shape[0]), k])
