@@ -108,7 +108,7 @@ class Prediction:
             )
         if su.servo_tau > 0:
             a = np.exp(-dt / su.servo_tau)
-            pos = np.column_stack([_first_order(pos[:, j], a) for j in range(3)])
+            pos = _first_order(pos, a)
         v = np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
         # Where the filtered positions are on the path: near the setpoint of tau earlier
         # (within a millimetre of it).
@@ -155,23 +155,27 @@ class Prediction:
 
 
 def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:
-    """y[k] = a y[k-1] + (1 - a) v[k], y[0] = v[0], vectorised in blocks of a few thousand."""
-    if a < TOL.negligible_pole or v.size == 0:
+    """y[k] = a y[k-1] + (1 - a) v[k], y[0] = v[0], vectorised in blocks of a few thousand;
+    ``v`` (m,) or (m, columns), each column on its own."""
+    if a < TOL.negligible_pole or v.shape[0] == 0:
         return v.copy()
     out = np.empty_like(v)
-    y = float(v[0])
-    n = v.size
+    y = v[0].copy()
+    n = v.shape[0]
     # a^-block must stay far from overflow: a^-block < e^25.
     block = int(max(1, min(2048, 25.0 / -np.log(a))))
     powers = a ** np.arange(1, block + 1)
+    inverse = a ** np.arange(1, block + 1)
+    if v.ndim == 2:
+        powers, inverse = powers[:, None], inverse[:, None]
     for c in range(0, n, block):
         x = v[c : c + block]
-        m = x.size
+        m = x.shape[0]
         p = powers[:m]
         # y_k = a^k y0 + (1 - a) sum_{i<=k} a^(k-i) x_i
-        w = (1.0 - a) * x / (a ** np.arange(1, m + 1))
-        out[c : c + m] = p * (y + np.cumsum(w))
-        y = float(out[c + m - 1])
+        w = (1.0 - a) * x / inverse[:m]
+        out[c : c + m] = p * (y + np.cumsum(w, axis=0))
+        y = out[c + m - 1].copy()
     return out
 
 
