@@ -71,23 +71,27 @@ def fit(
     feed gap)."""
     m = base.machine
     defaults = eff.start(m)
-    cache: dict[tuple, tuple[float, list[Prediction]]] = {}
+    # the gap and setup of every candidate scored (not its predictions: hundreds of
+    # profiles; those of the best are made again, the same, at the end)
+    cache: dict[tuple, tuple[float, Setup]] = {}
     plans: list[tuple[Setup, list[Prediction]]] = []
 
     def score(values: dict[str, float]) -> float:
-        key = tuple(round(values[p.name], 12) for p in eff.params)
+        key = _key(eff, values)
         if key not in cache:
-            preds = predict_all(indicators_of, tps, eff.apply(base, values), plans)
-            cache[key] = (objective.gap(preds, data, "calibration"), preds)
+            setup = eff.apply(base, values)
+            preds = predict_all(indicators_of, tps, setup, plans)
+            cache[key] = (objective.gap(preds, data, "calibration"), setup)
         return cache[key][0]
 
     if not eff.params:
         score({})
-        return {}, cache[()][1]
+        return {}, predict_all(indicators_of, tps, cache[()][1])
     params = eff.params
     if eff.stages:
         best = _staged(eff, defaults, score)
-        return _refined(eff, best, defaults, score, cache)
+        best = _refined(eff, best, defaults, score)
+        return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
     if len(params) == 1:
         p = params[0]
         candidates = [{p.name: float(x)} for x in grid(p, GRID_1D)]
@@ -109,7 +113,8 @@ def fit(
         for p in params:
             line = [best | {p.name: float(x)} for x in grid(p, GRID_1D)]
             best = min([best, *line], key=score)
-    return _refined(eff, best, defaults, score, cache)
+    best = _refined(eff, best, defaults, score)
+    return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
 
 
 def _staged(
@@ -142,8 +147,7 @@ def _refined(
     best: dict[str, float],
     defaults: dict[str, float],
     score: Callable[[dict[str, float]], float],
-    cache: dict[tuple, tuple[float, list[Prediction]]],
-) -> tuple[dict[str, float], list[Prediction]]:
+) -> dict[str, float]:
     """Local refinement from ``best``, then parameters the data cannot see back to their
     defaults."""
     params = eff.params
@@ -186,5 +190,9 @@ def _refined(
         trial[p.name] = defaults[p.name]
         if score(trial) <= score(best) * (1 + TOL.rel_equal):
             best = trial
-    key = tuple(round(best[p.name], 12) for p in eff.params)
-    return best, cache[key][1]
+    return best
+
+
+def _key(eff: Effect, values: dict[str, float]) -> tuple[float, ...]:
+    """Where a fit keeps what it scored for ``values`` (equal to 12 decimals: one candidate)."""
+    return tuple(round(values[p.name], 12) for p in eff.params)
