@@ -180,30 +180,51 @@ def _bisect_ramp(
     half_r = 0.5 * r
     one_r = 1.0 - r
     two_a = 2 * a
-    a_p, b_p = np.zeros(lo.size), np.ones(lo.size)
-    big_g = np.empty(lo.size)
+    n = lo.size
+    a_p, b_p = np.zeros(n), np.ones(n)
+    p, pp, x, big_g, t = (np.empty(n) for _ in range(5))
+    below = np.empty(n, dtype=bool)
     for _ in range(26):
-        p = 0.5 * (a_p + b_p)
-        vt = lo + p * dv if rising else lo + (1.0 - p) * dv
-        q = 1.0 - p
+        np.add(a_p, b_p, out=p)
+        np.multiply(p, 0.5, out=p)
+        # x = (v^2 - vb2) / (2 a), v = lo + p dv (rising) or lo + (1 - p) dv
+        if rising:
+            np.multiply(p, dv, out=x)
+        else:
+            np.subtract(1.0, p, out=x)
+            np.multiply(x, dv, out=x)
+        np.add(lo, x, out=x)
+        np.multiply(x, x, out=x)
+        np.subtract(x, vb2, out=x)
+        np.divide(x, two_a, out=x)
+        # G: the middle branch everywhere, then the ends of the ramp where p is in them
+        np.multiply(p, p, out=pp)
+        np.subtract(pp, rr, out=big_g)
+        np.multiply(big_g, 0.5, out=big_g)
+        np.subtract(p, r, out=t)
+        np.multiply(half_r, t, out=t)
+        np.subtract(big_g, t, out=big_g)
+        np.multiply(c, big_g, out=big_g)
+        np.add(inner0, big_g, out=big_g)
         first = p < r
-        last = ~first & (p > one_r)
-        mid = ~(first | last)
         i = np.flatnonzero(first)
         if i.size:
             big_g[i] = c[i] * p[i] ** 3 / six_rs[i]
-        i = np.flatnonzero(last)
+        i = np.flatnonzero(~first & (p > one_r))
         if i.size:
-            qi = q[i]
+            qi = 1.0 - p[i]
             big_g[i] = 0.5 - qi + c[i] * qi**3 / six_rs[i]
-        i = np.flatnonzero(mid)
-        if i.size:
-            pi, ri = p[i], r[i]
-            big_g[i] = inner0[i] + c[i] * (0.5 * (pi * pi - rr[i]) - half_r[i] * (pi - ri))
-        x = (vt * vt - vb2) / two_a + span * (big_g - 0.5 * p * p)
-        below = (x < goal) if rising else (-x < goal)
-        a_p = np.where(below, p, a_p)
-        b_p = np.where(below, b_p, p)
+        # x += span (G - p^2 / 2)   (0.5 p p: exactly half of p p)
+        np.multiply(pp, 0.5, out=pp)
+        np.subtract(big_g, pp, out=big_g)
+        np.multiply(span, big_g, out=big_g)
+        np.add(x, big_g, out=x)
+        if not rising:
+            np.negative(x, out=x)
+        np.less(x, goal, out=below)
+        np.copyto(a_p, p, where=below)
+        np.logical_not(below, out=below)
+        np.copyto(b_p, p, where=below)
     return a_p, b_p
 
 
