@@ -108,7 +108,8 @@ class PathSamples:
                 key, d2 = self._key(cand, qx, qy, qz, guess)
                 seen.append((cand, np.sqrt(d2)))
                 if off == -half:
-                    best_key, best_d2, best_i = key, d2, cand
+                    # (copies: ``seen`` keeps this offset's candidates)
+                    best_key, best_d2, best_i = key, d2, cand.copy()
                     continue
                 better = key < best_key
                 best_key[better] = key[better]
