@@ -27,6 +27,9 @@ NEAR_BLOCK = 65536
 #: covers the rounding of the distances it compares.
 COARSE = 5
 NEAR_SLACK = 1e-9
+#: Relative margin on the polyline lengths that bound distances along the path (their sums'
+#: rounding).
+REACH_SLACK = 1e-12
 
 
 @dataclass(frozen=True, eq=False)
@@ -169,7 +172,7 @@ class PathSamples:
         out = np.zeros(self.points.shape[0])
         for k in range(COARSE):
             out += seg[k : k + out.size]
-        return out * (1.0 + 1e-12)
+        return out * (1.0 + REACH_SLACK)
 
     def _project_near_gathered(
         self, q: NDArray[np.float64], s_guess: NDArray[np.float64], half: int
