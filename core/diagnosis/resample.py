@@ -227,8 +227,9 @@ def _speeds(pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_]) -> ND
     if bits is None:
         return pred.speed_at(s)
     entry = d.memo.get(which)
-    if entry is None or entry[0] is not sel:
-        entry = d.memo[which] = (sel, s, [])
+    # (copies of a Data share its memo: kept for this grid and selection only)
+    if entry is None or entry[0] is not sel or entry[1] is not d.s:
+        entry = d.memo[which] = (sel, d.s, [])
     recent: list[tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]] = entry[2]
     best = None
     for old_bits, k, v in recent:
