@@ -113,10 +113,18 @@ def _nearest(
     With ``s_p`` (k,) and ``s_exp`` (m,), points equally near are told apart by how close
     their arc length is to the expected one (a penalty of TOL.sequence_tie mm per mm of arc length).
     """
-    d2 = np.einsum("ij,ij->i", q, q)[:, None] - 2 * q @ p.T + np.einsum("ij,ij->i", p, p)[None, :]
-    d2 = np.maximum(d2, 0.0)
+    # |q|^2 - 2 q.p + |p|^2, floored at 0, in place (the same operations in the same order)
+    d2 = q @ p.T
+    np.multiply(d2, 2, out=d2)
+    np.subtract(np.einsum("ij,ij->i", q, q)[:, None], d2, out=d2)
+    np.add(d2, np.einsum("ij,ij->i", p, p)[None, :], out=d2)
+    np.maximum(d2, 0.0, out=d2)
     if s_p is not None and s_exp is not None:
-        k = np.argmin(d2 + (TOL.sequence_tie * (s_p[None, :] - s_exp[:, None])) ** 2, axis=1)
+        key = np.subtract(s_p[None, :], s_exp[:, None])
+        np.multiply(key, TOL.sequence_tie, out=key)
+        np.square(key, out=key)
+        np.add(d2, key, out=key)
+        k = np.argmin(key, axis=1)
     else:
         k = np.argmin(d2, axis=1)
     return k, np.sqrt(d2[np.arange(q.shape[0]), k])
@@ -150,20 +158,40 @@ def _project(
             mv = order[a:b]
             moves_of_line[u] = (int(mv.min()), int(mv.max()))
         done = np.zeros(m, dtype=bool)
-        for u in np.unique(line_of_sample).tolist():
+        # The samples of each line (in time order), and the path points of moves a..b as
+        # index ranges: the path points are in move order, and (checked) in arc length.
+        by_line = np.argsort(line_of_sample, kind="stable")
+        u_all, u_first = np.unique(line_of_sample[by_line], return_index=True)
+        u_last = np.append(u_first[1:], m)
+        ordered = s_p.size < 2 or bool(np.all(s_p[1:] >= s_p[:-1]))
+        for u, f0, f1 in zip(u_all.tolist(), u_first.tolist(), u_last.tolist(), strict=True):
             if u not in moves_of_line:
                 continue
-            sel = np.flatnonzero(line_of_sample == u)
+            sel = by_line[f0:f1]
             a, b = moves_of_line[u]
             # The move of the line, or its neighbours (blends carry a neighbour's line),
             # or up to LAG_BACK mm behind (actual positions lag the setpoint's line) where
             # one of them is nearer: the line's own move wins ties, such as a plunge back
             # down the path of the retract before it.
-            own = np.flatnonzero((owner >= a) & (owner <= b))
-            s_a = s_p[own[0]] if own.size else 0.0
-            win = np.flatnonzero(
-                ((owner >= a - 1) & (owner <= b + 1)) | ((s_p >= s_a - LAG_BACK) & (owner <= b))
-            )
+            if ordered:
+                i_a, i_b1 = np.searchsorted(owner, (a, b + 1))
+                own = np.arange(i_a, i_b1)
+                s_a = s_p[own[0]] if own.size else 0.0
+                i_n0, i_n1 = np.searchsorted(owner, (a - 1, b + 2))
+                i_s = int(np.searchsorted(s_p, s_a - LAG_BACK))  # first s_p >= s_a - LAG_BACK
+                lag = np.arange(i_s, i_b1)
+                near = np.arange(i_n0, i_n1)
+                win = (
+                    np.arange(min(i_n0, i_s), max(i_n1, i_b1))
+                    if lag.size and near.size and i_s <= i_n1 and i_n0 <= i_b1
+                    else np.union1d(near, lag)
+                )
+            else:
+                own = np.flatnonzero((owner >= a) & (owner <= b))
+                s_a = s_p[own[0]] if own.size else 0.0
+                win = np.flatnonzero(
+                    ((owner >= a - 1) & (owner <= b + 1)) | ((s_p >= s_a - LAG_BACK) & (owner <= b))
+                )
             # (on from the line's start: a drilling cycle's feed down and rapid back up its
             # own hole are one line)
             _, s_exp = _run_on(q[sel], s_a)

@@ -18,9 +18,13 @@ from core.diagnosis.objective import FEED, Objective
 from core.diagnosis.rules import GRID_1D, GRID_2D, GRID_ND, REFINE
 from core.engine.effects import Effect, Param, Setup
 from core.engine.indicators import IndicatorSource
-from core.engine.predict import Prediction, predict
+from core.engine.predict import Prediction, predict, retimed, same_plan
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
+
+#: Plans (evaluations and profiles) a fit keeps for candidates that only change the
+#: time-domain filters (servo lag, setpoint filter).
+PLANS = 2
 
 
 def grid(p: Param, count: int) -> NDArray[np.float64]:
@@ -34,10 +38,24 @@ def grid(p: Param, count: int) -> NDArray[np.float64]:
 
 
 def predict_all(
-    indicators_of: IndicatorSource, tps: Sequence[ToolPath], setup: Setup
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    setup: Setup,
+    plans: list[tuple[Setup, list[Prediction]]] | None = None,
 ) -> list[Prediction]:
-    """The prediction of ``setup`` for every program."""
-    return [predict(indicators_of, tp, setup) for tp in tps]
+    """The prediction of ``setup`` for every program. ``plans``: predictions made before
+    (most recent last, kept to PLANS); one of a setup that plans alike (differs in the
+    time-domain filters only) gives its evaluations and profiles, and this one is added."""
+    if plans is not None:
+        for k in range(len(plans) - 1, -1, -1):
+            setup_k, preds_k = plans[k]
+            if same_plan(setup_k, setup):
+                return [retimed(p, setup) for p in preds_k]
+    preds = [predict(indicators_of, tp, setup) for tp in tps]
+    if plans is not None:
+        plans.append((setup, preds))
+        del plans[:-PLANS]
+    return preds
 
 
 def fit(
@@ -53,22 +71,27 @@ def fit(
     feed gap)."""
     m = base.machine
     defaults = eff.start(m)
-    cache: dict[tuple, tuple[float, list[Prediction]]] = {}
+    # the gap and setup of every candidate scored (not its predictions: hundreds of
+    # profiles; those of the best are made again, the same, at the end)
+    cache: dict[tuple, tuple[float, Setup]] = {}
+    plans: list[tuple[Setup, list[Prediction]]] = []
 
     def score(values: dict[str, float]) -> float:
-        key = tuple(round(values[p.name], 12) for p in eff.params)
+        key = _key(eff, values)
         if key not in cache:
-            preds = predict_all(indicators_of, tps, eff.apply(base, values))
-            cache[key] = (objective.gap(preds, data, "calibration"), preds)
+            setup = eff.apply(base, values)
+            preds = predict_all(indicators_of, tps, setup, plans)
+            cache[key] = (objective.gap(preds, data, "calibration"), setup)
         return cache[key][0]
 
     if not eff.params:
         score({})
-        return {}, cache[()][1]
+        return {}, predict_all(indicators_of, tps, cache[()][1])
     params = eff.params
     if eff.stages:
         best = _staged(eff, defaults, score)
-        return _refined(eff, best, defaults, score, cache)
+        best = _refined(eff, best, defaults, score)
+        return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
     if len(params) == 1:
         p = params[0]
         candidates = [{p.name: float(x)} for x in grid(p, GRID_1D)]
@@ -90,7 +113,8 @@ def fit(
         for p in params:
             line = [best | {p.name: float(x)} for x in grid(p, GRID_1D)]
             best = min([best, *line], key=score)
-    return _refined(eff, best, defaults, score, cache)
+    best = _refined(eff, best, defaults, score)
+    return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
 
 
 def _staged(
@@ -123,8 +147,7 @@ def _refined(
     best: dict[str, float],
     defaults: dict[str, float],
     score: Callable[[dict[str, float]], float],
-    cache: dict[tuple, tuple[float, list[Prediction]]],
-) -> tuple[dict[str, float], list[Prediction]]:
+) -> dict[str, float]:
     """Local refinement from ``best``, then parameters the data cannot see back to their
     defaults."""
     params = eff.params
@@ -167,5 +190,9 @@ def _refined(
         trial[p.name] = defaults[p.name]
         if score(trial) <= score(best) * (1 + TOL.rel_equal):
             best = trial
-    key = tuple(round(best[p.name], 12) for p in eff.params)
-    return best, cache[key][1]
+    return best
+
+
+def _key(eff: Effect, values: dict[str, float]) -> tuple[float, ...]:
+    """Where a fit keeps what it scored for ``values`` (equal to 12 decimals: one candidate)."""
+    return tuple(round(values[p.name], 12) for p in eff.params)

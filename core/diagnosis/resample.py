@@ -17,7 +17,7 @@ from __future__ import annotations
 import dataclasses
 import math
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 
 import numpy as np
 from numpy.typing import NDArray
@@ -55,6 +55,8 @@ class Data:
     #: the noise of the measured feed (mm/s RMS) from its samples in time (NaN: samples too
     #: coarse or irregular for that; :func:`trace_noise` then falls back on the path grid)
     noise: float = math.nan
+    #: recent predicted speeds on the selections of this grid (:func:`_speeds`)
+    memo: dict = field(default_factory=dict, repr=False)
 
 
 def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
@@ -186,6 +188,69 @@ def held_out_chunks(
     return np.asarray(sq), np.asarray(n)
 
 
+#: Profiles whose speeds on a selection of a grid :func:`_speeds` keeps.
+RECENT = 3
+
+
+def _move_values(pred: Prediction) -> NDArray[np.int64] | None:
+    """(fields, n) the bits of every per-move value the profile's speed at a place depends on
+    (:meth:`core.engine.profile.Profile.speed_at`), or None where the prediction is not a
+    profile's speed (point model, time-domain filters)."""
+    prof = pred.profile
+    su = pred.setup
+    if prof is None or not (su.servo_tau <= 0 and su.filter_window <= 0):
+        return None
+    tp = prof.toolpath
+    cols = [
+        tp.start_s,
+        tp.length,
+        prof.v_entry,
+        prof.v_peak,
+        prof.v_exit,
+        prof.a_up,
+        prof.a_down,
+        prof.hold_start,
+        prof.hold_end,
+        *(prof.ramps or ()),
+    ]
+    return np.stack([np.asarray(c, dtype=np.float64).view(np.int64) for c in cols])
+
+
+def _speeds(pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_]) -> NDArray[np.float64]:
+    """The predicted speed at the grid points ``sel`` of ``d``: where a recent profile on
+    the same selection had every per-move value of a move bit for bit (a fit's candidates
+    often change a few moves), its speeds there, the others computed -- the same values
+    as ``pred.speed_at`` everywhere (the speed at a place depends on its move's values
+    alone)."""
+    s = d.s[sel]
+    bits = _move_values(pred) if which == "calibration" else None
+    if bits is None:
+        return pred.speed_at(s)
+    entry = d.memo.get(which)
+    # (copies of a Data share its memo: kept for this grid and selection only)
+    if entry is None or entry[0] is not sel or entry[1] is not d.s:
+        entry = d.memo[which] = (sel, d.s, [])
+    recent: list[tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]] = entry[2]
+    best = None
+    for old_bits, k, v in recent:
+        if old_bits.shape != bits.shape or not np.array_equal(old_bits[0], bits[0]):
+            continue  # other moves (their starts decide which move a place is on)
+        changed = (old_bits != bits).any(axis=0)[k]
+        if best is None or np.count_nonzero(changed) < np.count_nonzero(best[0]):
+            best = (changed, k, v)
+    if best is None:
+        k = pred.toolpath.move_at(s)
+        v = pred.speed_at(s)
+    else:
+        changed, k, v = best
+        v = v.copy()
+        if changed.any():
+            v[changed] = pred.speed_at(s[changed])
+    recent.append((bits, k, v))
+    del recent[:-RECENT]
+    return v
+
+
 def gap(preds: Sequence[Prediction], data: Sequence[Data], which: str) -> float:
     """RMS over time of measured - predicted feed (mm/min) on the calibration, held-out or
     all data."""
@@ -200,7 +265,7 @@ def gap(preds: Sequence[Prediction], data: Sequence[Data], which: str) -> float:
         )
         if not sel.any():
             continue
-        r = d.v[sel] - preds[d.case].speed_at(d.s[sel])
+        r = d.v[sel] - _speeds(preds[d.case], d, which, sel)
         w = d.weight[sel]
         sq += float(np.sum(w * r * r))
         n += float(w.sum())

@@ -5,6 +5,7 @@ for comparison with measured traces (see :mod:`core.engine.effects` for the step
 from __future__ import annotations
 
 import dataclasses
+import math
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -45,6 +46,9 @@ class Prediction:
     evaluation: Evaluation
     profile: Profile | None
     path: ToolPath | None = None
+    #: What predictions of one plan (:func:`retimed`) share: the unfiltered signal and
+    #: its places on the path, computed once for all of them.
+    shared: dict = dataclasses.field(default_factory=dict, repr=False)
 
     @property
     def toolpath(self) -> ToolPath:
@@ -81,15 +85,20 @@ class Prediction:
         su = self.setup
         if su.servo_tau <= 0 and su.filter_window <= 0:
             return None
-        t, s, _ = self.signal(raw=True)
-        dt = t[1] - t[0] if t.size > 1 else SIGNAL_DT
         tp = self.path if self.path is not None else self.toolpath
+        raw = self.shared.get("raw")
+        if raw is None:
+            t, s, _ = self.signal(raw=True)
+            raw = self.shared["raw"] = (t, s, tp.point_at(s))
+        t, s, pos = raw
+        dt = t[1] - t[0] if t.size > 1 else SIGNAL_DT
         # Rest before and after, long enough for the filters' tails to carry the distance.
         head = int(np.ceil(0.5 * su.filter_window / dt)) + 1
         tail = head + int(np.ceil(8.0 * su.servo_tau / dt)) + 1
         s = np.concatenate([np.full(head, s[0]), s, np.full(tail, s[-1])])
         t = (np.arange(s.size) - head) * dt + t[0]
-        pos = tp.point_at(s)
+        # (the points of the padded arc lengths: those of the ends repeated)
+        pos = np.concatenate([np.repeat(pos[:1], head, 0), pos, np.repeat(pos[-1:], tail, 0)])
         k = max(int(round(su.filter_window / dt)), 1) if su.filter_window > 0 else 1
         if k > 1:
             kernel = np.ones(k) / k
@@ -99,7 +108,7 @@ class Prediction:
             )
         if su.servo_tau > 0:
             a = np.exp(-dt / su.servo_tau)
-            pos = np.column_stack([_first_order(pos[:, j], a) for j in range(3)])
+            pos = _first_order(pos, a)
         v = np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
         # Where the filtered positions are on the path: near the setpoint of tau earlier
         # (within a millimetre of it).
@@ -146,23 +155,27 @@ class Prediction:
 
 
 def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:
-    """y[k] = a y[k-1] + (1 - a) v[k], y[0] = v[0], vectorised in blocks of a few thousand."""
-    if a < TOL.negligible_pole or v.size == 0:
+    """y[k] = a y[k-1] + (1 - a) v[k], y[0] = v[0], vectorised in blocks of a few thousand;
+    ``v`` (m,) or (m, columns), each column on its own."""
+    if a < TOL.negligible_pole or v.shape[0] == 0:
         return v.copy()
     out = np.empty_like(v)
-    y = float(v[0])
-    n = v.size
+    y = v[0].copy()
+    n = v.shape[0]
     # a^-block must stay far from overflow: a^-block < e^25.
     block = int(max(1, min(2048, 25.0 / -np.log(a))))
     powers = a ** np.arange(1, block + 1)
+    inverse = a ** np.arange(1, block + 1)
+    if v.ndim == 2:
+        powers, inverse = powers[:, None], inverse[:, None]
     for c in range(0, n, block):
         x = v[c : c + block]
-        m = x.size
+        m = x.shape[0]
         p = powers[:m]
         # y_k = a^k y0 + (1 - a) sum_{i<=k} a^(k-i) x_i
-        w = (1.0 - a) * x / (a ** np.arange(1, m + 1))
-        out[c : c + m] = p * (y + np.cumsum(w))
-        y = float(out[c + m - 1])
+        w = (1.0 - a) * x / inverse[:m]
+        out[c : c + m] = p * (y + np.cumsum(w, axis=0))
+        y = out[c + m - 1].copy()
     return out
 
 
@@ -175,6 +188,46 @@ def compression_runs(tp: ToolPath, max_angle: float, max_length: float) -> NDArr
     inside = np.zeros(tp.n - 1, dtype=bool)
     inside[tp.junctions] = True
     return inside & short[:-1] & short[1:] & (tp.turn_angle < max_angle)
+
+
+#: The setup's fields that act on the motion in time only (:attr:`Prediction._filtered`):
+#: the plan -- evaluation and profile -- does not depend on them.
+TIME_DOMAIN = frozenset({"servo_tau", "filter_window"})
+
+
+def _same(a: object, b: object) -> bool:
+    """Whether two setup values are certainly the same: one object, or equal numbers of
+    one type and sign (tuples element by element)."""
+    if a is b:
+        return True
+    if isinstance(a, tuple) and isinstance(b, tuple):
+        return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if type(a) is type(b) and type(a) in (int, float, bool):
+        return bool(a == b) and math.copysign(1.0, a) == math.copysign(1.0, b)  # type: ignore[arg-type]
+    return False
+
+
+def same_plan(a: Setup, b: Setup) -> bool:
+    """Whether two setups plan the same motion (differ at most in :data:`TIME_DOMAIN`)."""
+    return all(
+        _same(getattr(a, f.name), getattr(b, f.name))
+        for f in dataclasses.fields(a)
+        if f.name not in TIME_DOMAIN
+    )
+
+
+def retimed(pred: Prediction, setup: Setup) -> Prediction:
+    """The prediction of ``setup``, which plans as ``pred``'s does (:func:`same_plan`): its
+    evaluation and profile, and the unfiltered signal shared."""
+    if not same_plan(pred.setup, setup):
+        raise ValueError("retimed: the setups plan differently")
+    return Prediction(
+        setup=setup,
+        evaluation=pred.evaluation,
+        profile=pred.profile,
+        path=pred.path,
+        shared=pred.shared,
+    )
 
 
 def predict(indicators_of: IndicatorSource, tp: ToolPath, setup: Setup) -> Prediction:

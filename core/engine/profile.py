@@ -155,6 +155,80 @@ def s_curve_big_g(p: ArrayLike, shape: tuple[NDArray, ...]) -> NDArray[np.float6
     )
 
 
+def _bisect_ramp(
+    lo: NDArray,
+    dv: NDArray,
+    a: NDArray,
+    vb2: NDArray,
+    span: NDArray,
+    shape: tuple[NDArray, ...],
+    goal: NDArray,
+    rising: bool,
+) -> tuple[NDArray, NDArray]:
+    """The bracket (a_p, b_p) of the share p of a jerk-limited ramp where it is at the place
+    ``goal`` (:meth:`Profile.speed_at`): 26 halvings (p to 1.5e-8 of the ramp) of where
+
+        x(p) = (v(p)^2 - vb2) / (2 a) + span (G(p) - p^2 / 2),  v(p) = lo + p dv rising,
+        lo + (1 - p) dv braking (x negated), G = :func:`s_curve_big_g`,
+
+    is below ``goal``. The same operations on every element as evaluating those formulas
+    array-wide (the terms that do not change with p computed once), each branch of G only
+    where it applies."""
+    r, c, rs = shape
+    six_rs = 6 * rs
+    inner0 = c * r * r / 6
+    rr = r * r
+    half_r = 0.5 * r
+    one_r = 1.0 - r
+    two_a = 2 * a
+    n = lo.size
+    a_p, b_p = np.zeros(n), np.ones(n)
+    p, pp, x, big_g, t = (np.empty(n) for _ in range(5))
+    below = np.empty(n, dtype=bool)
+    for _ in range(26):
+        np.add(a_p, b_p, out=p)
+        np.multiply(p, 0.5, out=p)
+        # x = (v^2 - vb2) / (2 a), v = lo + p dv (rising) or lo + (1 - p) dv
+        if rising:
+            np.multiply(p, dv, out=x)
+        else:
+            np.subtract(1.0, p, out=x)
+            np.multiply(x, dv, out=x)
+        np.add(lo, x, out=x)
+        np.multiply(x, x, out=x)
+        np.subtract(x, vb2, out=x)
+        np.divide(x, two_a, out=x)
+        # G: the middle branch everywhere, then the ends of the ramp where p is in them
+        np.multiply(p, p, out=pp)
+        np.subtract(pp, rr, out=big_g)
+        np.multiply(big_g, 0.5, out=big_g)
+        np.subtract(p, r, out=t)
+        np.multiply(half_r, t, out=t)
+        np.subtract(big_g, t, out=big_g)
+        np.multiply(c, big_g, out=big_g)
+        np.add(inner0, big_g, out=big_g)
+        first = p < r
+        i = np.flatnonzero(first)
+        if i.size:
+            big_g[i] = c[i] * p[i] ** 3 / six_rs[i]
+        i = np.flatnonzero(~first & (p > one_r))
+        if i.size:
+            qi = 1.0 - p[i]
+            big_g[i] = 0.5 - qi + c[i] * qi**3 / six_rs[i]
+        # x += span (G - p^2 / 2)   (0.5 p p: exactly half of p p)
+        np.multiply(pp, 0.5, out=pp)
+        np.subtract(big_g, pp, out=big_g)
+        np.multiply(span, big_g, out=big_g)
+        np.add(x, big_g, out=x)
+        if not rising:
+            np.negative(x, out=x)
+        np.less(x, goal, out=below)
+        np.copyto(a_p, p, where=below)
+        np.logical_not(below, out=below)
+        np.copyto(b_p, p, where=below)
+    return a_p, b_p
+
+
 def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[NDArray, NDArray]:
     """(n,) tangential acceleration and jerk of each move: min_k limit_k / share_k."""
     share = tp.axis_share
@@ -348,21 +422,8 @@ class Profile:
             target = into[sel] if rising else rest[sel]
             span = dv * dv / a  # dv * T, T = dv / a the ramp's duration
             shape = s_curve_shape(dv, acc[kk], jerk[kk])  # once, not per bisection step
-            vb2 = vb * vb
-
-            def place(p, lo=lo, dv=dv, a=a, vb2=vb2, span=span, shape=shape, rising=rising):
-                vt = lo + p * dv if rising else lo + (1.0 - p) * dv
-                big_g = s_curve_big_g(p, shape)
-                x = (vt * vt - vb2) / (2 * a) + span * (big_g - 0.5 * p * p)
-                return x if rising else -x  # increasing in p either way
-
-            a_p, b_p = np.zeros(sel.size), np.ones(sel.size)
             goal = target if rising else -target
-            for _ in range(26):  # p to 1.5e-8 of the ramp
-                mid = 0.5 * (a_p + b_p)
-                below = place(mid) < goal
-                a_p = np.where(below, mid, a_p)
-                b_p = np.where(below, b_p, mid)
+            a_p, b_p = _bisect_ramp(lo, dv, a, vb * vb, span, shape, goal, rising)
             g_share = s_curve_g(0.5 * (a_p + b_p), shape)
             v[sel] = lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
         return v

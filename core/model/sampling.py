@@ -8,6 +8,7 @@ to find where a point lies on the path.
 from __future__ import annotations
 
 from dataclasses import dataclass
+from functools import cached_property
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -20,6 +21,15 @@ from core.model.tolerances import TOL
 PROJECTION_STEP = 0.05
 #: Rows per block when projecting (bounded temporaries: rows x window x 3 floats).
 PROJECT_BLOCK = 8192
+#: Rows per block of :meth:`PathSamples.project_near` (a few (rows,) temporaries per offset).
+NEAR_BLOCK = 65536
+#: :meth:`PathSamples.project_near` looks at every COARSE-th candidate first; NEAR_SLACK (mm)
+#: covers the rounding of the distances it compares.
+COARSE = 5
+NEAR_SLACK = 1e-9
+#: Relative margin on the polyline lengths that bound distances along the path (their sums'
+#: rounding).
+REACH_SLACK = 1e-12
 
 
 @dataclass(frozen=True, eq=False)
@@ -41,6 +51,11 @@ class PathSamples:
     s: NDArray[np.float64]
     move: NDArray[np.int64]
     step: float
+
+    @cached_property
+    def _columns(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+        """x, y and z of the points, each contiguous."""
+        return tuple(np.ascontiguousarray(self.points[:, j]) for j in range(3))  # type: ignore[return-value]
 
     def project_near(
         self, q: ArrayLike, s_guess: ArrayLike, half_width: float = 1.0
@@ -66,8 +81,106 @@ class PathSamples:
             raise ValueError(
                 f"q must have shape (m, 3) and s_guess (m,), got {q.shape} and {s_guess.shape}"
             )
+        s_p = self.s
+        half = int(half_width / self.step)
+        if not (np.isfinite(q).all() and np.isfinite(s_guess).all()):
+            return self._project_near_gathered(q, s_guess, half)
+        # Every COARSE-th offset of the window for all points, then the offsets between two
+        # of them only for the points they might be nearer for: by the triangle inequality
+        # none of them is nearer than half (sum of the two distances - the path length
+        # between the two points). Ties go to the earlier offset, as an argmin over the
+        # whole window would: the same point as before.
+        last = s_p.size - 1
+        coarse = list(range(-half, half + 1, COARSE))
+        if coarse[-1] != half:
+            coarse.append(half)
+        reach = self._reach
+        s = np.empty(q.shape[0])
+        dist = np.empty(q.shape[0])
+        for c in range(0, q.shape[0], NEAR_BLOCK):
+            part = slice(c, c + NEAR_BLOCK)
+            qx, qy, qz = q[part, 0], q[part, 1], q[part, 2]
+            guess = s_guess[part]
+            j = np.searchsorted(s_p, guess)
+            best_key = best_d2 = np.empty(0)
+            best_i = np.empty(0, dtype=np.int64)
+            best_o = np.full(j.size, -half)
+            seen = []
+            for off in coarse:
+                cand = np.clip(j + off, 0, last)
+                key, d2 = self._key(cand, qx, qy, qz, guess)
+                seen.append((cand, np.sqrt(d2)))
+                if off == -half:
+                    # (copies: ``seen`` keeps this offset's candidates)
+                    best_key, best_d2, best_i = key, d2, cand.copy()
+                    continue
+                better = key < best_key
+                best_key[better] = key[better]
+                best_d2[better] = d2[better]
+                best_i[better] = cand[better]
+                best_o[better] = off
+            for (o1, o2), (c1, d1), (_, d2) in zip(
+                zip(coarse[:-1], coarse[1:], strict=True), seen[:-1], seen[1:], strict=True
+            ):
+                if o2 - o1 < 2:
+                    continue
+                low = 0.5 * (d1 + d2 - reach[c1]) - NEAR_SLACK
+                rows = np.flatnonzero(~((low > 0) & (low * low > best_key)))
+                if rows.size == 0:
+                    continue
+                jr, qxr, qyr, qzr, gr = j[rows], qx[rows], qy[rows], qz[rows], guess[rows]
+                for off in range(o1 + 1, o2):
+                    cand = np.clip(jr + off, 0, last)
+                    key, d2r = self._key(cand, qxr, qyr, qzr, gr)
+                    bk = best_key[rows]
+                    better = (key < bk) | ((key == bk) & (off < best_o[rows]))
+                    r = rows[better]
+                    best_key[r] = key[better]
+                    best_d2[r] = d2r[better]
+                    best_i[r] = cand[better]
+                    best_o[r] = off
+            s[part] = s_p[best_i]
+            dist[part] = np.sqrt(best_d2)
+        return s, dist
+
+    def _key(
+        self,
+        cand: NDArray[np.int64],
+        qx: NDArray[np.float64],
+        qy: NDArray[np.float64],
+        qz: NDArray[np.float64],
+        guess: NDArray[np.float64],
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """What :meth:`project_near` minimises for the points ``cand`` (squared distance
+        plus the pass tie-break), and the squared distance."""
+        px, py, pz = self._columns
+        dx = px[cand] - qx
+        dy = py[cand] - qy
+        dz = pz[cand] - qz
+        # (the order of the sum the gathered einsum takes: the same values)
+        d2 = (dx * dx + dz * dz) + dy * dy
+        # Points of two passes of the path that coincide (a plunge down the retract): the
+        # one nearer the guess along the path.
+        return d2 + (TOL.pass_tie * (self.s[cand] - guess)) ** 2, d2
+
+    @cached_property
+    def _reach(self) -> NDArray[np.float64]:
+        """(p,) the length of the polyline through points i .. i + COARSE (at least the
+        distance from point i to any of them)."""
+        seg = np.sqrt(np.sum(np.diff(self.points, axis=0) ** 2, axis=1))
+        seg = np.concatenate([seg, np.zeros(COARSE)])
+        out = np.zeros(self.points.shape[0])
+        for k in range(COARSE):
+            out += seg[k : k + out.size]
+        return out * (1.0 + REACH_SLACK)
+
+    def _project_near_gathered(
+        self, q: NDArray[np.float64], s_guess: NDArray[np.float64], half: int
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """:meth:`project_near` over the whole window at once (argmin's NaN rules: used
+        where a point or a guess is not finite)."""
         pts, s_p = self.points, self.s
-        k_off = np.arange(-int(half_width / self.step), int(half_width / self.step) + 1)
+        k_off = np.arange(-half, half + 1)
         s = np.empty(q.shape[0])
         dist = np.empty(q.shape[0])
         for c in range(0, q.shape[0], PROJECT_BLOCK):
@@ -76,8 +189,6 @@ class PathSamples:
             cand = np.clip(j[:, None] + k_off[None, :], 0, s_p.size - 1)
             diff = pts[cand] - q[part][:, None, :]
             d2 = np.einsum("mkj,mkj->mk", diff, diff)
-            # Points of two passes of the path that coincide (a plunge down the retract):
-            # the one nearer the guess along the path.
             ds = s_p[cand] - s_guess[part][:, None]
             best = np.argmin(d2 + (TOL.pass_tie * ds) ** 2, axis=1)
             rows = np.arange(best.size)
