@@ -214,9 +214,11 @@ def linuxcnc_blends(
     t_int = machine.interpolation_time
     servo = t_int / LCNC_MIN_SEGMENT_CYCLES
     lp, ln = tp.length[j], tp.length[j + 1]
-    # each segment's top speed: its feed, and its length over one block time
-    cap_p = np.fmin(tp.feed[j], lp / t_int)
-    cap_n = np.fmin(tp.feed[j + 1], ln / t_int)
+    # each segment's top speed (tcGetMaxTargetVel): its feed within the axes' and the path's
+    # limits, and its length over one block time
+    v_top = _path_speed(tp, np.concatenate([j, j + 1]), machine)
+    cap_p = np.fmin(v_top[: j.size], lp / t_int)
+    cap_n = np.fmin(v_top[j.size :], ln / t_int)
     half = beta / 2.0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         d_tol = np.sin(half) * tit / (2.0 * np.sin(beta / 4.0) ** 2)
@@ -264,8 +266,11 @@ def linuxcnc_choice(
     a0, a1 = a_path[: j.size], a_path[j.size :]
     t_int = machine.interpolation_time
     l0, l1 = tp.length[k0], tp.length[k1]
-    f0 = np.fmin(tp.feed[k0], l0 / t_int)
-    f1 = np.fmin(tp.feed[k1], l1 / t_int)
+    # each segment's top speed (tcGetMaxTargetVel): its feed, at most what its axes and the
+    # path limit allow, and its length in one block time
+    v_top = _path_speed(tp, np.concatenate([k0, k1]), machine)
+    f0 = np.fmin(v_top[: j.size], l0 / t_int)
+    f1 = np.fmin(v_top[j.size :], l1 / t_int)
     cos_half = np.cos(beta / 2.0)
     sin_half = np.sin(beta / 2.0)
     # the program's G64 P bounds a parabolic blend; without one (NaN) nothing does
@@ -299,6 +304,15 @@ def linuxcnc_choice(
     )
     share = np.where(mode == 1, 0.5, np.where(mode == 2, 1.0 - LCNC_KINK_RATIO, 1.0))
     return mode, speed, share
+
+
+def _path_speed(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray:
+    """(m,) the programmed feed of moves ``k``, at most min_k Vmax_k / share_k and the
+    machine's path speed limit (a program's F above the machine's runs at the machine's)."""
+    share = tp.axis_share[k]
+    with np.errstate(divide="ignore"):
+        v = np.where(share > 0, machine.max_feed[None, :] / share, np.inf).min(axis=1)
+    return np.fmin(np.fmin(tp.feed[k], v), machine.max_path_feed)
 
 
 def _path_acceleration(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray:

@@ -289,3 +289,13 @@ def test_without_a_tolerance_a_blend_arc_deviates_a_quarter_of_the_shorter_segme
     assert free.feed[0] == pytest.approx(100.0)
     tight = tangential(nc, turn(90.0), lcnc())
     assert tight.values["radius_mm"][0] == pytest.approx(0.0241421, rel=1e-5)
+
+
+def test_a_feed_above_the_machines_runs_at_the_machines(nc):
+    """F 1000 mm/s where the axes allow 500 (tcGetMaxTargetVel): the kink test at 0.02 deg
+    takes 500, (500 / 0.001 + 2000) / 2000 sin(0.02 deg) = 0.087620 < 0.1: tangent (with
+    F 1000 it would be 0.1749, an arc)."""
+    ind = tangential(nc, turn(0.02, feed=1000.0), lcnc())
+    kink = 251.0 * math.sin(math.radians(0.02))
+    assert ind.values["hold_mm"][0] == 0.0
+    assert ind.values["acceleration_share"][0] == pytest.approx(1.0 - kink)
