@@ -1,7 +1,7 @@
 """The blind diagnosis benchmark: programs and settings the diagnosis was not tuned on.
 
-Not a test: ``python benchmarks/blind_linuxcnc.py --seeds tune|score|score2|score3 [--cache DIR]
-[--jobs 2] [--only N]`` (needs LinuxCNC and ../shared/tools/linuxcnc; the traces are
+Not a test: ``python benchmarks/blind_linuxcnc.py --seeds tune|score|score2|score3|score4
+[--cache DIR] [--jobs 2] [--only N]`` (needs LinuxCNC and ../shared/tools/linuxcnc; the traces are
 recorded in real time, about 25 min per seed set, and cached).
 
 Programs come from ten families (benchmarks/blind/families.py: random polygons, trochoidal
@@ -50,8 +50,9 @@ INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
 #: ``score2`` (seeds 20000-20509): a second held-out set, recorded on 2026-11-26 after the
 #: ``score`` set had been diagnosed once and its misses studied (so ``score`` is no longer
 #: unseen); diagnosed once, with the code of the commit that reports it.
-#: ``score4`` (seeds 40000-40509): recorded at the start of the 2026-11-26 afternoon work on
-#: LinuxCNC's blend choice (parabolic blends, kinks) and diagnosed once, with its final code.
+#: ``score4`` (seeds 40000-40509): recorded on 2026-11-26 (15:58-16:21 UTC) after LinuxCNC's
+#: blend choice had been developed on tune and score2, before any of its traces was looked at;
+#: diagnosed once, at commit a756895.
 SEEDS = {"tune": 100, "score": 9000, "score2": 20000, "score3": 30000, "score4": 40000}
 #: Programs per changed setting.
 PER_VARIANT = 4
