@@ -971,3 +971,12 @@ def test_a_g_word_beyond_a_double_is_refused_without_a_numpy_warning():
         warnings.simplefilter("error")
         err = refusal("G" + "9" * 400 + " X1\n", "t.nc")
     assert err.line == 1 and "G word out of range" in str(err)
+
+
+def test_linuxcnc_a_lone_o_name_or_expression_is_read_and_ignored():
+    """``o<abc>`` or ``o[#1*2]`` with no keyword on its own line: LinuxCNC's interpreter reads
+    the program and ignores the line (checked with lcnc_path_check.py); with a subroutine in
+    the file ncperf crashed on it (int() of the name or the expression, found by the fuzzer)."""
+    text = "G21\n#1=3\no<pocket> sub\nG1 X#1\no<pocket> endsub\no<abc>\no[#1*2]\nG1 X1 F100\nM2\n"
+    tp = read(text)
+    assert_path(tp, [8], [(1.0, 0.0, 0.0)])

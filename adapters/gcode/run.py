@@ -144,7 +144,9 @@ class Unit:
                     sub_open = None
                 st["o_lines"].setdefault(_key(label), []).append((i, kw))
             elif kind == "prog":
-                if s[1] is not None:
+                # a Fanuc program number; LinuxCNC reads a lone o<name> or o[expression]
+                # too, and ignores it (its own interpreter, checked): no program to go to
+                if isinstance(s[1], int | float):
                     st["progs"].setdefault(int(s[1]), i)
             elif kind in ("while", "if", "loop", "for", "repeat") and self.dialect == "siemens":
                 stack.append((kind, i, ""))
