@@ -515,6 +515,17 @@ def test_drilling_cycles_in_both_apt_forms():
     assert z[-2] == pytest.approx(20.0) and z[-1] == pytest.approx(30.0)
 
 
+def test_a_subpeck_of_zero_means_every_peck_is_the_step():
+    """CYCLE/DEEP2 with SUBPECK 0 (fuzzer: the read never ended, adding pecks of 0 mm): every
+    peck is the STEP, 3 mm from the RAPTO level z = 2: to -1, -4, then the depth -7."""
+    tp = read(
+        f"{F600}GOTO/0,0,10\nCYCLE/DEEP2,FEDTO,7,STEP,3,SUBPECK,0,MMPM,60,RAPTO,2\n"
+        "GOTO/0,0,0\nCYCLE/OFF\n"
+    )
+    z = tp.end[:, 2]
+    assert np.allclose(z[tp.kind == 1][1:], [-1, -4, -7])
+
+
 def test_cycle_off_alone_passes():
     """CYCLE/OFF without a cycle is harmless."""
     assert read(f"{F600}GOTO/1,0,0\nCYCLE/OFF\n").n == 1

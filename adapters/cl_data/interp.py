@@ -657,7 +657,8 @@ class Reader:
         kind = c["kind"]
         peck = c.get("peck")
         if kind in ("DEEP", "BRKCHP", "DEEP2") and peck:
-            smallest = min(peck, c.get("subpeck") or peck)
+            sub = c.get("subpeck") or peck  # SUBPECK 0: none, every peck is STEP
+            smallest = min(peck, sub)
             if (c["depth"] + c["clear"]) / smallest > MAX_PECKS:
                 raise self._error(
                     rec,
@@ -673,7 +674,7 @@ class Reader:
                 else:
                     rapid(clear)
                     rapid(top - axis * reached)
-                step = c.get("subpeck", peck)
+                step = sub
         feed(bottom)
         if c.get("dwell", 0.0) > 0:
             self.dwells.append((self.n - 1, c["dwell"]))
