@@ -310,7 +310,7 @@ def _path_speed(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray
     """(m,) the programmed feed of moves ``k``, at most min_k Vmax_k / share_k and the
     machine's path speed limit (a program's F above the machine's runs at the machine's)."""
     share = tp.axis_share[k]
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):  # a share near 0: inf, no limit
         v = np.where(share > 0, machine.max_feed[None, :] / share, np.inf).min(axis=1)
     return np.fmin(np.fmin(tp.feed[k], v), machine.max_path_feed)
 
@@ -320,7 +320,7 @@ def _path_acceleration(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> 
     BLEND_ACC_RATIO_TANGENTIAL of it for their normal acceleration)."""
     share = tp.axis_share[k]
     acc = np.asarray(machine.max_acceleration, dtype=np.float64)
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):  # a share near 0: inf, no limit
         a = np.where(share > 0, acc[None, :] / share, np.inf).min(axis=1)
     a = np.where(np.isfinite(a), a, acc.min())
     return np.where(tp.is_arc[k], a * LCNC_TANGENTIAL_RATIO, a)

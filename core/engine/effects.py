@@ -275,7 +275,7 @@ def arc_caps(tp: ToolPath, machine: Machine, *, jerk: bool = True) -> NDArray[np
     share_n = g.max_share(u0, w0, tp.sweep[a][:, None])
     radius = 1.0 / np.abs(tp.curvature[a])
     acc = machine.max_acceleration * machine.normal_acceleration_factor
-    with np.errstate(divide="ignore", invalid="ignore"):
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         v = np.where(share_n > 0, np.sqrt(acc * radius[:, None] / share_n), np.inf).min(axis=1)
         if jerk:
             share_t = tp.axis_share[a]
