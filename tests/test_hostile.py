@@ -429,3 +429,22 @@ def test_toml_integer_beyond_pythons_digit_limit(tmp_path, capsys, program):
     m.write_text("a = " + "9" * 5000 + "\n")
     rc, _, errors = cli(capsys, "analyze", program, "--machine", m)
     assert rc == 1 and "integer longer than" in errors[0] and errors[0].startswith(f"{m}:")
+
+
+def test_no_numpy_warning_reaches_the_terminal(tmp_path):
+    """A rapid whose Y component is 1e-310 mm (a subnormal: every axis limit divided by it
+    overflows to inf, which the models take as "no limit"): numpy's RuntimeWarnings, with
+    their source lines, were printed on the terminal; the command line keeps them off it
+    and the result is finite. Run as a user runs it (pytest would catch the warnings)."""
+    p = tmp_path / "tiny.cls"
+    p.write_text("FEDRAT/MMPM,600\nGOTO/0,0,0\nRAPID\nGOTO/100,1e-310,0\nGOTO/200,0,0\n")
+    js = tmp_path / "out.json"
+    r = subprocess.run(
+        [sys.executable, "-m", "core", "analyze", str(p), "--json", str(js)],
+        capture_output=True,
+        text=True,
+        cwd=ROOT,
+    )
+    assert r.returncode == 0, r.stderr
+    assert "Warning" not in r.stderr, r.stderr
+    assert "nan" not in js.read_text().lower()

@@ -13,6 +13,7 @@ import math
 import os
 import sys
 import time
+import warnings
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, NoReturn
 
@@ -707,7 +708,11 @@ def _main(argv: list[str] | None) -> int:
         print(f"ncperf: {exc}", file=sys.stderr)
         return 2
     try:
-        with transaction():  # a failure leaves none of the run's outputs behind
+        # a failure leaves none of the run's outputs behind; numpy's floating-point warnings
+        # (an overflow to inf that the models read as "no limit") are not for the user:
+        # results are checked finite where they are made, and bad input is a line error
+        with transaction(), warnings.catch_warnings():
+            warnings.simplefilter("ignore", RuntimeWarning)
             rc = int(args.run(args, nc))
         if rc == 0 and getattr(args, "open_after", None):
             _open_html(args.open_after)  # once the file is in place
