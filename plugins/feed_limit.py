@@ -26,7 +26,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     i = np.flatnonzero(tp.is_feed)
     share = tp.axis_share
     vmax = np.broadcast_to(np.asarray(machine.max_feed, dtype=np.float64), share.shape[1:])
-    cap, axis = _lowest_axis(share, i, vmax)
+    cap, axis = lowest_axis(share, i, vmax)
     # the path speed limit over all axes (LinuxCNC's [TRAJ]MAX_LINEAR_VELOCITY)
     path = cap > machine.max_path_feed
     cap = np.where(path, machine.max_path_feed, cap)
@@ -44,9 +44,10 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     ]
 
 
-def _lowest_axis(share_all: NDArray, i: NDArray, vmax: NDArray) -> tuple[NDArray, NDArray]:
+def lowest_axis(share_all: NDArray, i: NDArray, vmax: NDArray) -> tuple[NDArray, NDArray]:
     """min_k Vmax_k / share_k over the moves ``i`` (inf where an axis has no share) and the
-    first axis k that gives it: axis by axis, without (m, 3) temporaries (the same values
+    first axis k that gives it (any per-axis limit: the LinuxCNC corner model takes the
+    accelerations' too): axis by axis, without (m, 3) temporaries (the same values
     as a row-wise argmin, which with no NaN is the first lowest)."""
     if np.isnan(vmax).any():  # argmin's NaN rule: the row-wise way
         share = share_all[i]
@@ -56,7 +57,7 @@ def _lowest_axis(share_all: NDArray, i: NDArray, vmax: NDArray) -> tuple[NDArray
         return per_axis[np.arange(i.size), axis], axis
     cap = np.full(i.size, np.inf)
     axis = np.zeros(i.size, dtype=np.intp)
-    with np.errstate(divide="ignore"):
+    with np.errstate(divide="ignore", over="ignore"):  # a share near 0: inf, no limit
         for k in range(share_all.shape[1]):
             share = share_all[:, k][i]
             per = np.where(share > 0, vmax[k] / share, np.inf)

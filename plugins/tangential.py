@@ -72,6 +72,7 @@ from numpy.typing import NDArray
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
 from core.engine.indicators import LCNC_KINK_RATIO, LCNC_MIN_SEGMENT_CYCLES, LCNC_TANGENTIAL_RATIO
 from core.model import geometry as g
+from plugins.feed_limit import lowest_axis
 
 NAME = "tangential"
 AXES = ("X", "Y", "Z")
@@ -309,19 +310,15 @@ def linuxcnc_choice(
 def _path_speed(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray:
     """(m,) the programmed feed of moves ``k``, at most min_k Vmax_k / share_k and the
     machine's path speed limit (a program's F above the machine's runs at the machine's)."""
-    share = tp.axis_share[k]
-    with np.errstate(divide="ignore", over="ignore"):  # a share near 0: inf, no limit
-        v = np.where(share > 0, machine.max_feed[None, :] / share, np.inf).min(axis=1)
+    v = lowest_axis(tp.axis_share, k, np.asarray(machine.max_feed, dtype=np.float64))[0]
     return np.fmin(np.fmin(tp.feed[k], v), machine.max_path_feed)
 
 
 def _path_acceleration(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray:
     """(m,) the tangential acceleration of moves ``k`` (min_k A_k / share_k; arcs keep
     BLEND_ACC_RATIO_TANGENTIAL of it for their normal acceleration)."""
-    share = tp.axis_share[k]
     acc = np.asarray(machine.max_acceleration, dtype=np.float64)
-    with np.errstate(divide="ignore", over="ignore"):  # a share near 0: inf, no limit
-        a = np.where(share > 0, acc[None, :] / share, np.inf).min(axis=1)
+    a = lowest_axis(tp.axis_share, k, acc)[0]
     a = np.where(np.isfinite(a), a, acc.min())
     return np.where(tp.is_arc[k], a * LCNC_TANGENTIAL_RATIO, a)
 
