@@ -201,13 +201,19 @@ def plane_acceleration(
 
 
 def linuxcnc_blends(
-    tp: ToolPath, j: NDArray[np.int64], beta: NDArray, tit: NDArray, machine: Machine
+    tp: ToolPath,
+    j: NDArray[np.int64],
+    beta: NDArray,
+    tit: NDArray,
+    machine: Machine,
+    caps: tuple[NDArray, NDArray],
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's corners (module docstring): the radius that limits the corner speed,
     the arc's radius as inserted (R_plan; 0 where the junction is run as tangent), whether
     it is tangent, the normal speed limit sqrt(a_n R) of the plane's acceleration with
     the axis that sets it, and the kink: the largest axis share of the acceleration turning
-    at speed in one servo period needs (tangent below LCNC_KINK_RATIO)."""
+    at speed in one servo period needs (tangent below LCNC_KINK_RATIO). ``caps``: the two
+    segments' top speeds (:func:`segment_caps`)."""
     t1, t2 = tp.tangent_end[j], tp.tangent_start[j + 1]
     acc = machine.max_acceleration
     a_plane, axis = plane_acceleration(t1, t2, acc)
@@ -215,11 +221,7 @@ def linuxcnc_blends(
     t_int = machine.interpolation_time
     servo = t_int / LCNC_MIN_SEGMENT_CYCLES
     lp, ln = tp.length[j], tp.length[j + 1]
-    # each segment's top speed (tcGetMaxTargetVel): its feed within the axes' and the path's
-    # limits, and its length over one block time
-    v_top = _path_speed(tp, np.concatenate([j, j + 1]), machine)
-    cap_p = np.fmin(v_top[: j.size], lp / t_int)
-    cap_n = np.fmin(v_top[j.size :], ln / t_int)
+    cap_p, cap_n = caps
     half = beta / 2.0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         d_tol = np.sin(half) * tit / (2.0 * np.sin(beta / 4.0) ** 2)
@@ -246,6 +248,7 @@ def linuxcnc_choice(
     arc_feed: NDArray,
     r_plan: NDArray,
     kink: NDArray,
+    caps: tuple[NDArray, NDArray],
     machine: Machine,
 ) -> tuple[NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's choice at the junctions that are not tangent kinks (``tpHandleBlendArc``,
@@ -260,18 +263,15 @@ def linuxcnc_choice(
     crosses the junction at (a parabolic blend: the blend speed the planner computes while
     running, with the segments' halved accelerations; the tool runs the blend's two halves
     at that speed on average, so it costs the time of that speed), and the share of the
-    tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio).
+    tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio). ``caps``: the two
+    segments' top speeds (:func:`segment_caps`).
     """
     k0, k1 = j, j + 1
     a_path = _path_acceleration(tp, np.concatenate([k0, k1]), machine)
     a0, a1 = a_path[: j.size], a_path[j.size :]
     t_int = machine.interpolation_time
     l0, l1 = tp.length[k0], tp.length[k1]
-    # each segment's top speed (tcGetMaxTargetVel): its feed, at most what its axes and the
-    # path limit allow, and its length in one block time
-    v_top = _path_speed(tp, np.concatenate([k0, k1]), machine)
-    f0 = np.fmin(v_top[: j.size], l0 / t_int)
-    f1 = np.fmin(v_top[j.size :], l1 / t_int)
+    f0, f1 = caps
     cos_half = np.cos(beta / 2.0)
     sin_half = np.sin(beta / 2.0)
     # the program's G64 P bounds a parabolic blend; without one (NaN) nothing does
@@ -307,11 +307,15 @@ def linuxcnc_choice(
     return mode, speed, share
 
 
-def _path_speed(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray:
-    """(m,) the programmed feed of moves ``k``, at most min_k Vmax_k / share_k and the
-    machine's path speed limit (a program's F above the machine's runs at the machine's)."""
+def segment_caps(tp: ToolPath, j: NDArray[np.int64], machine: Machine) -> tuple[NDArray, NDArray]:
+    """The top speed of the segments before and after junctions ``j`` (tcGetMaxTargetVel):
+    the programmed feed within min_k Vmax_k / share_k and the path speed limit (a program's
+    F above the machine's runs at the machine's), and the length over one block time."""
+    k = np.concatenate([j, j + 1])
     v = lowest_axis(tp.axis_share, k, np.asarray(machine.max_feed, dtype=np.float64))[0]
-    return np.fmin(np.fmin(tp.feed[k], v), machine.max_path_feed)
+    top = np.fmin(np.fmin(tp.feed[k], v), machine.max_path_feed)
+    top = np.fmin(top, tp.length[k] / machine.interpolation_time)
+    return top[: j.size], top[j.size :]
 
 
 def _path_acceleration(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray:
@@ -376,7 +380,10 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
         tit = np.where(np.isnan(tol), machine.path_tolerance, tol)
     tangent = None
     if machine.corner_blending == "linuxcnc":
-        radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(tp, j, beta, tit, machine)
+        caps = segment_caps(tp, j, machine)
+        radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(
+            tp, j, beta, tit, machine, caps
+        )
     else:
         shorter = np.minimum(tp.length[j], tp.length[j + 1])
         radius = inserted = inserted_radius(beta, shorter, tit)
@@ -399,6 +406,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
                 feed[choose],
                 inserted[choose],
                 kink[choose],
+                (caps[0][choose], caps[1][choose]),
                 machine,
             )
             other = mode > 0
