@@ -11,7 +11,10 @@ move where the machine goes -- machine = rotate(program + G92) + G5x, as LinuxCN
 does (lib/python/rs274/interpret.py) -- so that a change of work offset is not a jump of the
 tool. ``../shared/tools/linuxcnc/lcnc_path_check.py`` is the same check without the offsets.
 Feed and rapid lengths are summed per source line (mm) and compared with what
-``ncperf analyze --json`` lists per line. One line per file: SAME, RAPIDS (feed path the
+``ncperf analyze --json --no-naive-cam`` lists per line (the module lists every block;
+LinuxCNC's task joins nearly collinear blocks under G64 P/Q afterwards, which ncperf models
+by default and tests/test_naivecam.py and tests/test_linuxcnc_planner_traces.py check). One
+line per file: SAME, RAPIDS (feed path the
 same), DIFF, MISS (ncperf refuses what LinuxCNC reads) or SKIP (LinuxCNC refuses it).
 
 The interpreter runs the startup code of the trace suite's millimetre machine
@@ -222,7 +225,10 @@ def linuxcnc(path):
 def ncperf(exe, path):
     with tempfile.TemporaryDirectory() as d:
         j = os.path.join(d, "o.json")
-        r = subprocess.run([exe, "analyze", path, "--json", j], capture_output=True, text=True)
+        # --no-naive-cam: the module lists every block, as the interpreter reads it; LinuxCNC's
+        # task joins nearly collinear ones afterwards (tests/test_naivecam.py checks that)
+        cmd = [exe, "analyze", path, "--json", j, "--no-naive-cam"]
+        r = subprocess.run(cmd, capture_output=True, text=True)
         if r.returncode != 0:
             lines = (r.stderr or r.stdout).strip().splitlines() or [f"exit {r.returncode}"]
             return None, lines[-1][:200]

@@ -130,9 +130,9 @@ def test_calibrate_command(tmp_path, capsys):
     args = []
     for k, g in enumerate(
         [
-            "G21 G90 G64 P0.01\nG1 X10 F6000\n"
+            "G21 G90 G64 P0.01 Q0\nG1 X10 F6000\n"
             + "".join(f"X{10 + 0.5 * i:.1f}\n" for i in range(1, 41)),
-            "G21 G90 G64 P0.01\nG1 Y10 F6000\n"
+            "G21 G90 G64 P0.01 Q0\nG1 Y10 F6000\n"
             + "".join(f"Y{10 + 0.5 * i:.1f}\n" for i in range(1, 41)),
         ]
     ):

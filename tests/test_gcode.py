@@ -224,8 +224,9 @@ def test_siemens_path_modes():
 
 
 def test_linuxcnc_g64_p_sets_the_path_tolerance():
-    """LinuxCNC G64 P0.02 is the path tolerance of the blocks it governs (mm; inch converted)."""
-    tp = read("G21 G64 P0.02 G1 X1 F60\nX2\nG64 X3\nG20 G64 P0.001 X1\n", "t.ngc")
+    """LinuxCNC G64 P0.02 is the path tolerance of the blocks it governs (mm; inch converted).
+    (Q0: LinuxCNC would otherwise run the collinear X1, X2 as one segment.)"""
+    tp = read("G21 G64 P0.02 Q0 G1 X1 F60\nX2\nG64 X3\nG20 G64 P0.001 X1\n", "t.ngc")
     assert np.allclose(tp.tolerance[:2], 0.02)
     assert np.isnan(tp.tolerance[2])
     assert tp.tolerance[3] == pytest.approx(0.0254)

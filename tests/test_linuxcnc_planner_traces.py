@@ -4,7 +4,9 @@ planner: programs written here are run headless through the shared harness
 compared with the recorded ones. The cases are the planner's other ways through a corner
 than a blend arc (plugins/tangential.py, ``linuxcnc_choice``): a line into a helix and out
 of it (no arc: not coplanar), and corners whose blend arc is too short for a 5 ms servo
-period. Skipped where the harness or LinuxCNC is absent (a fresh clone has no ../shared)."""
+period; and the segments LinuxCNC's interpreter makes of nearly collinear blocks under
+G64 P without Q (its naive-CAM detector, adapters/gcode/naivecam.py). Skipped where the
+harness or LinuxCNC is absent (a fresh clone has no ../shared)."""
 
 from __future__ import annotations
 
@@ -107,5 +109,38 @@ def test_corners_whose_arc_is_too_short_for_the_servo_period(tmp_path):
     1.275 s; predicted 1.277 s (with arcs, as before the choice was modelled: 1.261 s, -1.1 %)."""
     tr = record(tmp_path, "squares", SQUARES, servo_ns=5_000_000)
     prof = predicted(tr["prog"], servo_s=0.005)
+    measured = float(tr["t"][-1] - tr["t"][0])
+    assert prof.cycle_time == pytest.approx(measured, rel=0.005)
+
+
+def _chords() -> str:
+    """90 chords of 1 mm on a circle of radius 200 mm (sagitta 0.000625 mm each), at F6000
+    under G64 P0.01 without Q: LinuxCNC's interpreter joins them in runs of about 4 mm (the
+    run's sagitta L^2 / (8 R) stays under 0.01 mm), then a sharp turn and 30 collinear 1 mm
+    blocks it joins into one segment."""
+    r, step = 200.0, 1.0 / 200.0
+    lines = ["(chords of a large circle, then collinear blocks, G64 P0.01 without Q)"]
+    lines += ["G21 G17 G90 G94", "G64 P0.01", "G0 X0 Y0 Z0", "G1 F6000"]
+    pts = [(r * np.sin(k * step), r - r * np.cos(k * step)) for k in range(1, 91)]
+    lines += [f"X{x:.4f} Y{y:.4f}" for x, y in pts]
+    x0, y0 = pts[-1]
+    lines += [f"X{x0:.4f} Y{y0 + k:.4f}" for k in range(1, 31)]
+    lines.append("M2")
+    return "\n".join(lines) + "\n"
+
+
+def test_nearly_collinear_blocks_run_as_the_segments_linuxcnc_makes(tmp_path):
+    """The segments (the trace's line numbers while moving) are the ones ncperf predicts: 28
+    of the 120 blocks' lines. Recorded 1.344 s, predicted 1.343 s; read block by block (as
+    before the detector was modelled) 1.327 s, -1.3 %."""
+    tr = record(tmp_path, "chords", _chords())
+    nc = Ncperf()
+    tp = nc.extract(str(tr["prog"]))
+    data = np.genfromtxt(tmp_path / "chords.csv", delimiter=",", names=True)
+    moving = data["v"] > 0
+    ran = set(np.unique(data["line"][moving].astype(int)).tolist())
+    assert set(tp.line.tolist()) == ran
+    assert len(ran) < 40  # about 90 / 4 + 1
+    prof = predicted(tr["prog"])
     measured = float(tr["t"][-1] - tr["t"][0])
     assert prof.cycle_time == pytest.approx(measured, rel=0.005)

@@ -17,16 +17,19 @@ assume is a notice on the tool path.
 
 from __future__ import annotations
 
+import dataclasses
 import os
 import re
 from pathlib import Path
 
+from adapters.gcode import naivecam
 from adapters.gcode.interp import NeedsInterpreter, detect_dialect, detect_dialect_text, interpret
 from adapters.gcode.lexer import Source, tokenize
 from adapters.gcode.setup import MachineSetup, machine_setup
 from adapters.gcode.words import DIALECTS
 from adapters.source import GCODE_EXTENSIONS
 from core import ExtractOptions, InputError, ToolPath, UsageError, hookimpl
+from core.model.errors import Notes
 from core.model.inputs import read_input
 
 #: Extensions CAM posts use for G-code (shared with the CL reader, which never claims them).
@@ -42,6 +45,7 @@ def read_gcode(
     dialect: str | None = None,
     block_delete: bool = False,
     setup: MachineSetup | None = None,
+    naive_cam: bool = True,
 ) -> ToolPath:
     """Parse G-code text (bytes) into a ToolPath.
 
@@ -60,16 +64,25 @@ def read_gcode(
         What the machine file says the controller holds before the program runs (home
         positions, work offsets, tool radii); a program that uses any of it is run by the
         full interpreter.
+    naive_cam : bool
+        LinuxCNC dialect: run nearly collinear blocks under G64 P/Q as the one segment
+        LinuxCNC's interpreter sends for them (:mod:`adapters.gcode.naivecam`); False reads
+        every block as a move of its own, as LinuxCNC's stand-alone interpreter lists them.
     """
     if dialect is not None and dialect not in DIALECTS:
         raise UsageError(f"unknown G-code dialect '{dialect}'; dialects: {', '.join(DIALECTS)}")
     _refuse_heidenhain(data, name)
     src = Source(name, data)
     setup = setup or MachineSetup()
+    lines: naivecam.LineInfo | None = None
+    scanned = False
     try:
         words = tokenize(src)
         d = dialect or detect_dialect(name, words)
-        return interpret(
+        if d == "linuxcnc" and naive_cam:
+            # before the reader, which lets the words go as it goes
+            lines, scanned = naivecam.scan(words, block_delete), True
+        tp = interpret(
             src,
             words,
             d,
@@ -79,13 +92,38 @@ def read_gcode(
             lengths_known=bool(setup.tool_length),
         )
     except (InputError, NeedsInterpreter):
-        pass
-    # The full interpreter is imported when a program needs it (its modules are a third of
-    # the adapter's start-up).
-    from adapters.gcode.run import run_program
+        # The full interpreter is imported when a program needs it (its modules are a third
+        # of the adapter's start-up).
+        from adapters.gcode.run import run_program
 
-    d = dialect or detect_dialect_text(name, data)
-    return run_program(name, data, d, block_delete, setup)
+        d = dialect or detect_dialect_text(name, data)
+        tp = run_program(name, data, d, block_delete, setup)
+        if d == "linuxcnc" and naive_cam and not scanned and _G64_PQ.search(data):
+            # words the plain tokenizer does not take ([expressions], #parameters)
+            return _with_notice(tp, name, NAIVE_CAM_UNREAD, _G64_PQ.search(data))
+    if lines is None:
+        return tp
+    notes = Notes(name)
+    out = naivecam.join(tp, lines, notes)
+    return dataclasses.replace(out, notices=out.notices + notes.notices())
+
+
+#: A G64 block with a P or Q word (LinuxCNC: the naive-CAM detector may be on).
+_G64_PQ = re.compile(rb"(?im)^[^(;\n]*G0*64(?![\d.])[^\n]*[PQ]")
+NAIVE_CAM_UNREAD = (
+    "G64 P/Q: LinuxCNC may run nearly collinear blocks as one segment (naive-CAM detector); "
+    "not modelled for this program (its words need the full interpreter): every block is "
+    "predicted as written"
+)
+
+
+def _with_notice(tp: ToolPath, name: str, message: str, m: re.Match[bytes] | None) -> ToolPath:
+    notes = Notes(name)
+    line = None
+    if m is not None:
+        line = m.string.count(b"\n", 0, m.start())
+    notes.add(message, line)
+    return dataclasses.replace(tp, notices=tp.notices + notes.notices())
 
 
 _HEIDENHAIN = re.compile(rb"^\s*\d*\s*BEGIN\s+PGM\b", re.MULTILINE | re.IGNORECASE)
@@ -128,4 +166,5 @@ def ncperf_extract(source: object, options: ExtractOptions) -> ToolPath | None:
         dialect=options.dialect,
         block_delete=options.block_delete,
         setup=machine_setup(options.setup),
+        naive_cam=options.naive_cam,
     )

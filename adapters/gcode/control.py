@@ -679,12 +679,6 @@ class Controller:
                     self.tolerance = p * self.scale if p is not None and p > 0 else math.nan
                     if code == W.EXACT_PATH:
                         self.tolerance = 0.0
-                    if code == 640 and words.get("Q", 0.0) > 0:
-                        self.notes.add(
-                            "G64 Q: LinuxCNC may merge collinear G1 blocks within Q; ncperf "
-                            "predicts every block",
-                            self.line,
-                        )
         if "settings" in extra:
             for name, value in extra["settings"]:
                 if name == "CTOL":

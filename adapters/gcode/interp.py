@@ -649,13 +649,6 @@ class Interpreter:
         bad = p["Q"] & ~q_ok
         if bad.any():
             raise self.error(al[np.argmax(bad)], "Q word not used by any code in this block")
-        merge = p["Q"] & g64 & (self.vals["Q"] > 0)
-        if lc and merge.any():
-            self.notes.add(
-                "G64 Q: LinuxCNC may merge collinear G1 blocks within Q; ncperf "
-                "predicts every block",
-                int(al[np.argmax(merge)]),
-            )
         if self._o_word_line is not None:
             raise self.error(
                 self._o_word_line,

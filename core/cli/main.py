@@ -234,6 +234,13 @@ def _common(p: argparse.ArgumentParser) -> None:
         help="skip blocks starting with '/' (block-delete switch on)",
     )
     p.add_argument(
+        "--no-naive-cam",
+        dest="naive_cam",
+        action="store_false",
+        help="LinuxCNC programs: read every block as a segment of its own (by default nearly "
+        "collinear blocks under G64 P/Q run as the one segment LinuxCNC makes of them)",
+    )
+    p.add_argument(
         "--tool-radius",
         type=float,
         metavar="MM",
@@ -307,7 +314,12 @@ def _options(args: argparse.Namespace, machine: Machine) -> ExtractOptions:
         if not (math.isfinite(args.tool_radius) and args.tool_radius >= 0):
             raise UsageError(f"--tool-radius must be a length >= 0 (mm), got {args.tool_radius:g}")
         setup = dataclasses.replace(setup, tool_radius=args.tool_radius)
-    return ExtractOptions(dialect=args.dialect, block_delete=args.block_delete, setup=setup)
+    return ExtractOptions(
+        dialect=args.dialect,
+        block_delete=args.block_delete,
+        setup=setup,
+        naive_cam=args.naive_cam,
+    )
 
 
 def _print_notices(tp_notices: tuple, stream) -> None:

@@ -66,11 +66,16 @@ class ExtractOptions:
     setup : ControllerSetup
         What the controller holds before the program (home, work offsets, tools, default
         path mode; from the machine file).
+    naive_cam : bool
+        LinuxCNC programs: run nearly collinear blocks under G64 P/Q as the one segment
+        LinuxCNC's interpreter makes of them (its naive-CAM detector); False: every block as
+        written.
     """
 
     dialect: str | None = None
     block_delete: bool = False
     setup: ControllerSetup = field(default_factory=ControllerSetup)
+    naive_cam: bool = True
 
 
 def _uniform(x: ArrayLike, dtype: type) -> NDArray | None:
