@@ -57,6 +57,14 @@ def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
     ap.add_argument("--cache", default="/tmp/ncperf-naivecam")
     ap.add_argument("--seed", type=int, default=70000)
+    ap.add_argument(
+        "--q0", action="store_true", help="keep the families' G64 P0.01 Q0 (no joining)"
+    )
+    ap.add_argument(
+        "--record-only",
+        action="store_true",
+        help="record the traces and stop (a held-out set is recorded before it is looked at)",
+    )
     args = ap.parse_args()
     cache = Path(args.cache)
     cache.mkdir(parents=True, exist_ok=True)
@@ -70,11 +78,17 @@ def main() -> int:
     for k, fam in enumerate(FAMILIES):
         seed = args.seed + k
         tol = float(rng.choice(TOLERANCES))
-        text = re.sub(r"G64 P0\.01 Q0", f"G64 P{tol:g}", program(fam, seed))
+        text = program(fam, seed)
+        if args.q0:
+            tol = 0.0
+        else:
+            text = re.sub(r"G64 P0\.01 Q0", f"G64 P{tol:g}", text)
         prog = cache / f"{fam}_{seed}.ngc"
         if not prog.exists():
             prog.write_text(text)
         trace = record(prog, cache / f"{fam}_{seed}.csv")
+        if args.record_only:
+            continue
         t = np.genfromtxt(trace, delimiter=",", names=True)
         moving = (t["v"] > 0) & (t["mtype"] != TRAVERSE)
         trace_lines = set(np.unique(t["line"][moving].astype(int)).tolist())
@@ -90,6 +104,9 @@ def main() -> int:
             out[key] = (len(lines), len(lines & trace_lines), cycle / measured - 1.0)
         out["blocks"] = out["as_written"][0]
         rows.append(out)
+    if args.record_only:
+        print(f"recorded in {cache}")
+        return 0
     today = datetime.date.today().isoformat()
     print(
         f"LinuxCNC naive-CAM detector (G64 P, no Q), seeds {args.seed}-{args.seed + 9}, "
