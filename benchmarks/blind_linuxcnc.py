@@ -1,6 +1,6 @@
 """The blind diagnosis benchmark: programs and settings the diagnosis was not tuned on.
 
-Not a test: ``python benchmarks/blind_linuxcnc.py --seeds tune|score|score2|score3|score4
+Not a test: ``python benchmarks/blind_linuxcnc.py --seeds tune|score|score2|score3|score4|score5
 [--cache DIR] [--jobs 2] [--only N]`` (needs LinuxCNC and ../shared/tools/linuxcnc; the traces are
 recorded in real time, about 25 min per seed set, and cached).
 
@@ -8,8 +8,8 @@ Programs come from ten families (benchmarks/blind/families.py: random polygons, 
 slots, gears of chords, free-form chord paths, spiral pockets, a dome raster, engraving,
 thread milling, a 2.5D part, long kinked lines), each drawn from a seed. Seed sets are kept
 apart: ``tune`` (seeds 100-999), used while developing the effects and the decision rule,
-and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999), ``score3`` (30000-30999)
-and ``score4`` (40000-40999),
+and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999), ``score3`` (30000-30999),
+``score4`` (40000-40999) and ``score5`` (50000-50999),
 each run for the figures in the README (the README says which were looked at afterwards).
 Every case is one program run through LinuxCNC 2.9's real planner on the harness's default
 mill with ONE setting changed (per-axis acceleration or speed, servo period, the path
@@ -53,7 +53,18 @@ INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
 #: ``score4`` (seeds 40000-40509): recorded on 2026-11-26 (15:58-16:21 UTC) after LinuxCNC's
 #: blend choice had been developed on tune and score2, before any of its traces was looked at;
 #: diagnosed once, at commit a756895.
-SEEDS = {"tune": 100, "score": 9000, "score2": 20000, "score3": 30000, "score4": 40000}
+#: ``score5`` (seeds 50000-50509): recorded on 2026-11-26 (from 19:20 UTC) after the naive-CAM
+#: detector and the piecewise ramps along LinuxCNC's free blend arcs were written (developed
+#: on tune, score2 and seeds 70000-70009 of linuxcnc_naivecam.py), before any of its traces
+#: was looked at; diagnosed once.
+SEEDS = {
+    "tune": 100,
+    "score": 9000,
+    "score2": 20000,
+    "score3": 30000,
+    "score4": 40000,
+    "score5": 50000,
+}
 #: Programs per changed setting.
 PER_VARIANT = 4
 

@@ -1073,10 +1073,10 @@ def _blend_holds(
     h_start: NDArray,
     h_end: NDArray,
     r_end: NDArray,
-) -> tuple[NDArray, NDArray, NDArray]:
+) -> tuple[NDArray, NDArray, NDArray, _FreeArcs | None]:
     """The holds of a planner that changes speed along its blend arcs at ``a_blend`` (None:
     held, as the paper has it), with the rests it runs as part of the next arc
-    (``Evaluation.blend_rest``).
+    (``Evaluation.blend_rest``); and the arcs the speed changes along (None: none).
 
     Along an arc the speed may change at a_blend instead of the move's acceleration: the
     ramps get the same reach (a (L - holds) + a_blend holds) when the holds they skip shrink
@@ -1110,13 +1110,133 @@ def _blend_holds(
         he[k] += rest[k]
         return hs, he, re
 
+    def free_arcs(free: NDArray) -> _FreeArcs | None:
+        if a_blend is None or not free.any():
+            return None
+        fs, fe = np.zeros(tp.n), np.zeros(tp.n)
+        fs[j[free] + 1] = h_start[j[free] + 1]
+        fe[j[free]] = h_end[j[free]] + merged[j[free]]
+        return _FreeArcs(fs, fe, np.fmin(acc, a_blend))
+
     binds = ev.junction_feed < np.minimum(cap[j], cap[j + 1]) * (1.0 - TOL.rel_equal)
     if a_blend is None or not binds.any():
-        return holds(~binds)  # (without a_blend nothing is scaled: keep is 1)
+        # (without a_blend nothing is scaled: keep is 1)
+        return (*holds(~binds), free_arcs(~binds))
     hs, he, _ = holds(~binds)
     v = _passes(caps, np.maximum(tp.length - hs - he, 0.0), acc, acc)
     below = v[j + 1] < ev.junction_feed * (1.0 - TOL.rel_equal)
-    return holds(~binds | below)
+    free = ~binds | below
+    return (*holds(free), free_arcs(free))
+
+
+@dataclass(frozen=True)
+class _FreeArcs:
+    """Per move, the stretches along blend arcs whose speed changes along them, at its start
+    (``start``) and at its end (``end``, with the rest run as part of the arc; mm, as
+    programmed), and the acceleration there (``a_blend``, at most the move's)."""
+
+    start: NDArray
+    end: NDArray
+    a_blend: NDArray
+
+
+def _piecewise_ramp(q, u, pieces) -> tuple[NDArray, NDArray]:
+    """Distance and time over which v^2 / 2 grows by ``q`` from speed ``u`` along
+    ``pieces`` ((length, acceleration) pairs, in order; what the last cannot take is
+    taken at its acceleration beyond it)."""
+    q = np.maximum(q, 0.0)
+    d = np.zeros(q.shape)
+    t = np.zeros(q.shape)
+    u = u.copy()
+    for i, (length, a) in enumerate(pieces):
+        take = q if i == len(pieces) - 1 else np.minimum(q, a * length)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            w = np.sqrt(u * u + 2.0 * take)
+            dt = np.where(take > 0, (w - u) / a, 0.0)
+            dd = np.where(take > 0, take / a, 0.0)
+        t += dt
+        d += dd
+        q = q - take
+        u = w
+    return d, t
+
+
+def _exact_blend_times(
+    fa: _FreeArcs,
+    sel: NDArray,
+    length: NDArray,
+    acc: NDArray,
+    h_start: NDArray,
+    h_end: NDArray,
+    r_start: NDArray,
+    r_end: NDArray,
+    v0: NDArray,
+    peak: NDArray,
+    v1: NDArray,
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """For the moves ``sel`` with free arcs: the holds and the acceleration that run them
+    in the time the planner takes -- speed changing at a_blend along the arcs and at the
+    move's acceleration between them, piece by piece -- with the same entry, peak and exit
+    speeds. The holds of a free arc are scaled by a factor in [0, 1] and the acceleration
+    keeps the reach: 1 is the shortened holds (flat, then a steep ramp), 0 one ramp at the
+    mean acceleration over the whole stretch; the factor is found by bisection (the time
+    falls as it grows). Returns the new h_start, h_end (of ``sel``), acceleration, and the
+    planner's times."""
+    fs, fe, ab = fa.start[sel], fa.end[sel], fa.a_blend[sel]
+    a = acc[sel]
+    L = length[sel]
+    hs, he = h_start[sel], h_end[sel]
+    rs, re = r_start[sel], r_end[sel]
+    u0, pk, u1 = v0[sel], peak[sel], v1[sel]
+    # the shortened holds of the free ends (the rest is held: a binding arc)
+    keep_s = np.where(fs > 0, hs, 0.0)
+    keep_e = np.where(fe > 0, he, 0.0)
+    held_s, held_e = hs - keep_s, he - keep_e
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_held = np.where(held_s > 0, rs * held_s / u0, 0.0) + np.where(
+            held_e > 0, re * held_e / u1, 0.0
+        )
+    t_held = np.nan_to_num(t_held, nan=0.0, posinf=0.0)
+    mid = np.maximum(L - held_s - held_e - fs - fe, 0.0)
+    q_up = (pk * pk - u0 * u0) / 2.0
+    q_dn = (pk * pk - u1 * u1) / 2.0
+    d_up, t_up = _piecewise_ramp(q_up, u0, ((fs, ab), (mid, a), (fe, ab)))
+    d_dn, t_dn = _piecewise_ramp(q_dn, u1, ((fe, ab), (mid, a), (fs, ab)))
+    cruise = np.maximum(mid + fs + fe - d_up - d_dn, 0.0)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_exact = t_held + t_up + t_dn + np.where(pk > 0, cruise / pk, 0.0)
+    reach = a * (L - hs - he)  # the reach the shortened holds give (kept at every factor)
+
+    def shape(lam: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        s0, s1 = held_s + lam * keep_s, held_e + lam * keep_e
+        inner = np.maximum(L - s0 - s1, 0.0)
+        with np.errstate(divide="ignore", invalid="ignore"):
+            a_l = np.where(inner > 0, reach / inner, a)
+            t_h = np.where(s0 > 0, rs * s0 / u0, 0.0) + np.where(s1 > 0, re * s1 / u1, 0.0)
+            t_r = (pk - u0) / a_l + (pk - u1) / a_l
+            cr = inner - (pk * pk - u0 * u0) / (2 * a_l) - (pk * pk - u1 * u1) / (2 * a_l)
+            t = np.nan_to_num(t_h, nan=0.0, posinf=0.0) + t_r
+            t = t + np.where(pk > 0, np.maximum(cr, 0.0) / pk, 0.0)
+        return s0, s1, a_l, t
+
+    lo, hi = np.zeros(L.size), np.ones(L.size)
+    t_lo, t_hi = shape(lo)[3], shape(hi)[3]
+    for _ in range(BLEND_SHAPE_STEPS):
+        mid_l = (lo + hi) / 2.0
+        t_mid = shape(mid_l)[3]
+        # the time falls from lam = 0 to 1 where the ramps' mean is slower than the pieces
+        up = (t_mid - t_exact) * (t_lo - t_hi) > 0
+        lo = np.where(up, mid_l, lo)
+        hi = np.where(up, hi, mid_l)
+    lam = (lo + hi) / 2.0
+    lam = np.where(t_exact >= np.maximum(t_lo, t_hi), np.where(t_lo >= t_hi, 0.0, 1.0), lam)
+    lam = np.where(t_exact <= np.minimum(t_lo, t_hi), np.where(t_lo <= t_hi, 0.0, 1.0), lam)
+    s0, s1, a_l, _ = shape(lam)
+    return s0, s1, a_l, t_exact
+
+
+#: Bisection steps for the shape of a move along free blend arcs (2^-30 of the factor).
+BLEND_SHAPE_STEPS = 30
 
 
 def build_profile(
@@ -1182,14 +1302,17 @@ def build_profile(
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
+    free_arcs: _FreeArcs | None = None
     if along_blends > 0.0 or ev.blend_rest is not None:
-        h_start, h_end, r_end = _blend_holds(
+        h_start, h_end, r_end, free_arcs = _blend_holds(
             ev, cap, caps, acc, a_blend if along_blends > 0.0 else None, h_start, h_end, r_end
         )
     if along_blends > 0.0:
         del a_blend  # (used by the holds only)
     holds = _Holds(length, h_start, h_end, r_start, r_end)
     jerk_limited = bool(np.isfinite(jerk).any())
+    if jerk_limited:
+        free_arcs = None  # (the S-curve ramps keep the shortened holds)
     # The rounds change the accelerations only (see _Rounds); the last one (the rounds' end,
     # or the first whose change is below JERK_CONVERGED) makes the speeds and times.
     rnd = _Rounds(caps, cap, acc, jerk, holds)
@@ -1216,6 +1339,22 @@ def build_profile(
     del b, caps  # (the boundary caps: the passes are done)
     if speeds is None:
         speeds = _moves(v, cap, a_up, a_dn, holds)
+        sel = np.zeros(0, dtype=np.intp)
+        if free_arcs is not None:
+            sel = np.flatnonzero(free_arcs.start + free_arcs.end > 0)
+        if free_arcs is not None and sel.size:
+            # The planner's time along its free arcs, piece by piece, with the same speeds
+            # at the blocks' ends and peaks: the holds and accelerations that give it.
+            s0, s1, a_l, _ = _exact_blend_times(
+                free_arcs, sel, length, acc, h_start, h_end, r_start, r_end, *speeds[:3]
+            )
+            h_start, h_end = h_start.copy(), h_end.copy()
+            h_start[sel], h_end[sel] = s0, s1
+            a_up, a_dn = a_up.copy(), a_dn.copy()
+            a_up[sel] = a_l
+            a_dn[sel] = a_l
+            holds = _Holds(length, h_start, h_end, r_start, r_end)
+            speeds = _moves(v, cap, a_up, a_dn, holds)
         del v
     # The holds' times are in the speeds now: the lengths between them go before the ramps
     # are made, and the cruise lengths once the ramps' marks have them.
