@@ -100,6 +100,18 @@ def test_speed_changes_along_an_arc_that_does_not_bind(nc):
     assert paper.cycle_time == pytest.approx(4.0 / math.sqrt(4000.0), rel=1e-4)
 
 
+def test_an_arc_run_at_cruise_costs_nothing(nc):
+    """Two 10 mm lines 1 degree apart at F 30: the arc (d = min(5, 2.29) mm, R = 262 mm,
+    sqrt(2000 x 0.866 R) >> 30) neither binds nor is a kink ((30 / 0.001 + 2000) sin 1deg /
+    2000 = 0.28 > 0.1). The speed is at F all along it, so its half acceleration changes
+    nothing: 0 -> 30 mm/s at 2000 on the first line's straight start (0.015 s, 0.225 mm),
+    the same stop at the end, cruise between: 2 x 0.015 + (20 - 0.45) / 30 = 0.681667 s.
+    (One ramp at the line's mean acceleration, 2000 x 7.71 / 10 + 1000 x 2.29 / 10 = 1771,
+    would take 0.0169 s to F.)"""
+    pr = nc.predict(turn(1.0, feed=30.0), Setup(machine=lcnc(), ramps=True)).profile
+    assert pr.cycle_time == pytest.approx(2 * 0.015 + (20.0 - 0.45) / 30.0, rel=1e-4)
+
+
 def test_a_binding_arc_is_run_at_its_speed(nc):
     """A 90-degree corner of two 10 mm lines at F 100: the arc binds (6.949 mm/s, as above;
     LinuxCNC caps its speed there), so it is held over its whole tangent length as the
