@@ -143,3 +143,17 @@ def test_half_an_arc_joins_the_line_before_it():
     segs = segments(read(text))
     assert segs[:2] == [(4, (1.0, -1.0), mid), (4, mid, (round(x1, 4), round(y1, 4)))]
     assert [s[0] for s in segs[2:]] == [5]
+
+
+def test_programs_the_full_interpreter_runs_are_joined_too():
+    """A G28 sends the program to the full interpreter: the blocks before it still join."""
+    tp = read("G21 G90 G64 P0.01\nG1 X1 F600\nX2\nX3\nG28\nM2\n")
+    assert [s[0] for s in segments(tp)] == [4]
+
+
+def test_words_the_plain_reader_cannot_take_leave_a_notice():
+    """G64 P#1: the tolerance is an expression the plain tokenizer does not read; ncperf says
+    the joining is not modelled and reads every block."""
+    tp = read("#1=0.01\nG21 G90 G64 P#1\nG1 X1 F600\nX2\nX3\nM2\n")
+    assert [s[0] for s in segments(tp)] == [3, 4, 5]
+    assert any("not modelled" in n.message for n in tp.notices)
