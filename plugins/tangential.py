@@ -59,7 +59,15 @@ differently in five ways the profile feels:
   blend (a helix's does not): there the choice is between the other two
   (:func:`linuxcnc_choice`). A short blend arc at a long servo period, or a line into a
   helix, is run as a parabolic blend;
-* a kink costs both segments its share of their acceleration (``tcSetKinkProperties``).
+* a kink costs both segments its share of their acceleration (``tcSetKinkProperties``);
+* next to a programmed arc (``blendInit3FromArcLine``, ``...LineArc``, ``...ArcArc``) the blend
+  is laid between a line and the arc's secant where the other segment turns towards the
+  arc's centre (convex): the arc keeps at most phi_max = min(2/3 of its angle (the arc
+  before the corner; 1/3 the arc after), theta) for the blend, the intersection half-angle
+  theta = (pi - b) / 2 drops to theta - phi_max / 4, and the arc side reaches
+  sin(phi_max / 4) R (else phi_max R, theta unchanged); between two arcs a theta below
+  pi / 12 gets no arc. A near-tangent line leaving an arc outward-bending then corners like
+  a 30 degree turn (:func:`arc_blend_geometry`).
 
 The servo period is the machine's block time over ``TP_MIN_SEGMENT_CYCLES`` = 1.02.
 """
@@ -93,6 +101,9 @@ LCNC_MIN_ARC_ANGLE = 1e-3
 #: tc.c tcFindBlendTolerance: the share of a segment a blend arc may deviate by.
 LCNC_TOLERANCE_RATIO = 0.25
 LCNC_ANGLE_EPSILON = 1e-6
+#: blendmath.c blendInit3FromArcArc: a blend between two arcs whose intersection half-angle
+#: is below this is not made (rad).
+LCNC_ARC_ARC_THETA_MIN = np.pi / 12.0
 
 
 def inserted_radius(
@@ -207,30 +218,36 @@ def linuxcnc_blends(
     tit: NDArray,
     machine: Machine,
     caps: tuple[NDArray, NDArray],
+    geometry: tuple[NDArray, NDArray, NDArray] | None = None,
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's corners (module docstring): the radius that limits the corner speed,
     the arc's radius as inserted (R_plan; 0 where the junction is run as tangent), whether
     it is tangent, the normal speed limit sqrt(a_n R) of the plane's acceleration with
     the axis that sets it, and the kink: the largest axis share of the acceleration turning
     at speed in one servo period needs (tangent below LCNC_KINK_RATIO). ``caps``: the two
-    segments' top speeds (:func:`segment_caps`)."""
+    segments' top speeds (:func:`segment_caps`); ``geometry``: the direction change the arc
+    is laid for and its reach before and after (:func:`arc_blend_geometry`; None: ``beta``
+    and half of each segment)."""
     t1, t2 = tp.tangent_end[j], tp.tangent_start[j + 1]
     acc = machine.max_acceleration
     a_plane, axis = plane_acceleration(t1, t2, acc)
     a_n = a_plane * machine.normal_acceleration_factor
     t_int = machine.interpolation_time
     servo = t_int / LCNC_MIN_SEGMENT_CYCLES
-    lp, ln = tp.length[j], tp.length[j + 1]
+    if geometry is None:
+        phi, reach_p, reach_n = beta, tp.length[j] / 2.0, tp.length[j + 1] / 2.0
+    else:
+        phi, reach_p, reach_n = geometry
     cap_p, cap_n = caps
-    half = beta / 2.0
+    half = phi / 2.0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
-        d_tol = np.sin(half) * tit / (2.0 * np.sin(beta / 4.0) ** 2)
-        d_geom = np.fmin(np.fmin(lp, ln) / 2.0, d_tol)
+        d_tol = np.sin(half) * tit / (2.0 * np.sin(phi / 4.0) ** 2)
+        d_geom = np.fmin(np.fmin(reach_p, reach_n), d_tol)
         r_geom = d_geom / np.tan(half)
         v_plan = np.fmin(np.sqrt(a_n * r_geom), np.fmax(cap_p, cap_n))
         a_par = LCNC_TANGENTIAL_RATIO * a_plane
         s_blend = np.fmin(np.sqrt(2.0 * a_par * d_geom), v_plan) / a_par * v_plan
-        r_plan = np.fmin(np.fmax(v_plan * v_plan / a_n, np.fmin(s_blend / beta, r_geom)), r_geom)
+        r_plan = np.fmin(np.fmax(v_plan * v_plan / a_n, np.fmin(s_blend / phi, r_geom)), r_geom)
         # tangent kinks: the acceleration of turning at full speed within one servo period
         a_inst = np.fmin(cap_p, cap_n) / servo + a_plane
         kink = np.max(np.abs(t2 - t1) * (a_inst[:, None] / acc[None, :]), axis=1)
@@ -250,6 +267,8 @@ def linuxcnc_choice(
     kink: NDArray,
     caps: tuple[NDArray, NDArray],
     machine: Machine,
+    phi: NDArray | None = None,
+    refused: NDArray | None = None,
 ) -> tuple[NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's choice at the junctions that are not tangent kinks (``tpHandleBlendArc``,
     ``tpChooseBestBlend``): the blend arc, a parabolic blend or a tangent kink, whichever
@@ -264,7 +283,8 @@ def linuxcnc_choice(
     running, with the segments' halved accelerations; the tool runs the blend's two halves
     at that speed on average, so it costs the time of that speed), and the share of the
     tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio). ``caps``: the two
-    segments' top speeds (:func:`segment_caps`).
+    segments' top speeds (:func:`segment_caps`); ``phi``: the direction change the blend
+    arc is laid for (None: ``beta``); ``refused``: junctions whose arc LinuxCNC refuses.
     """
     k0, k1 = j, j + 1
     a_path = _path_acceleration(tp, np.concatenate([k0, k1]), machine)
@@ -294,7 +314,9 @@ def linuxcnc_choice(
         perf_parabolic = cos_half * (plan[0] + plan[1]) / 2.0 / 2.0
         perf_tangent = np.fmin(f0, f1) * LCNC_KINK_RATIO / kink
         arc_ok = _arc_blend_possible(tp, j)
-        arc_len = r_plan * beta
+        if refused is not None:
+            arc_ok &= ~refused
+        arc_len = r_plan * (beta if phi is None else phi)
         perf_arc = np.where(arc_ok, np.fmin(arc_feed, arc_len / t_int), 0.0)
         run = _parabolic_speed(a0 * 0.5, a1 * 0.5, l0, l1, l0, l1, f0, f1, tol, sin_half)
     perf = np.stack([perf_arc, np.nan_to_num(perf_parabolic), np.nan_to_num(perf_tangent)])
@@ -342,6 +364,44 @@ def _parabolic_speed(a0, a1, reach0, reach1, l0, l1, f0, f1, tol, sin_half):
     return np.fmin(v0, v_tol), np.fmin(v1, v_tol)
 
 
+def arc_blend_geometry(
+    tp: ToolPath, j: NDArray[np.int64], beta: NDArray
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+    """LinuxCNC's blend geometry at junctions ``j`` (module docstring, last point): the
+    direction change the blend arc is laid for (pi - 2 theta; ``beta`` between lines), how
+    far it may reach along the segment before and after (half a line; an arc's secant
+    share), and whether a blend between two arcs is refused (theta < pi / 12)."""
+    theta_tan = (np.pi - beta) / 2.0
+    theta = theta_tan.copy()
+    reach_p = tp.length[j] / 2.0
+    reach_n = tp.length[j + 1] / 2.0
+    p = tp.end[j]
+    for k, before in ((j, True), (j + 1, False)):
+        arc = tp.is_arc[k]
+        if not arc.any():
+            continue
+        a = np.flatnonzero(arc)
+        ka = k[a]
+        nrm = tp.normal[ka]
+        r = p[a] - tp.center[ka]
+        r = r - g.dot(r, nrm)[:, None] * nrm  # in the arc's plane (a helix rises along nrm)
+        radius = g.norm(r)
+        other = tp.tangent_start[ka + 1] if before else tp.tangent_end[ka - 1]
+        d = g.dot(r, other)
+        convex = d < 0.0 if before else d >= 0.0
+        share = 2.0 / 3.0 if before else 1.0 / 3.0
+        phi_max = np.fmin(tp.sweep[ka] * share, np.where(convex, theta_tan[a], np.pi / 2.0))
+        theta[a] = np.where(convex, np.fmin(theta[a], theta_tan[a] - phi_max / 4.0), theta[a])
+        reach = np.where(convex, np.sin(phi_max / 4.0) * radius, phi_max * radius)
+        if before:
+            reach_p[a] = reach
+        else:
+            reach_n[a] = reach
+    both = tp.is_arc[j] & tp.is_arc[j + 1]
+    refused = both & (theta < LCNC_ARC_ARC_THETA_MIN)
+    return np.pi - 2.0 * theta, reach_p, reach_n, refused
+
+
 def _arc_blend_possible(tp: ToolPath, j: NDArray[np.int64]) -> NDArray[np.bool_]:
     """Whether LinuxCNC tries a blend arc (``tpCheckBlendArcType``, the coplanarity checks
     of the line-arc, arc-line and arc-arc blends): always between lines; next to an arc only
@@ -379,10 +439,12 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     else:
         tit = np.where(np.isnan(tol), machine.path_tolerance, tol)
     tangent = None
+    phi = beta
     if machine.corner_blending == "linuxcnc":
         caps = segment_caps(tp, j, machine)
+        phi, reach_p, reach_n, refused = arc_blend_geometry(tp, j, beta)
         radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(
-            tp, j, beta, tit, machine, caps
+            tp, j, beta, tit, machine, caps, (phi, reach_p, reach_n)
         )
     else:
         shorter = np.minimum(tp.length[j], tp.length[j + 1])
@@ -408,6 +470,8 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
                 kink[choose],
                 (caps[0][choose], caps[1][choose]),
                 machine,
+                phi[choose],
+                refused[choose],
             )
             other = mode > 0
             c = choose[other]
@@ -433,8 +497,8 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             values={
                 "radius_mm": radius,
                 "angle_deg": np.degrees(beta),
-                "hold_mm": np.nan_to_num(inserted * np.tan(beta / 2.0), nan=0.0, posinf=0.0),
-                "travel_mm": np.nan_to_num(inserted * beta / 2.0, nan=0.0, posinf=0.0),
+                "hold_mm": np.nan_to_num(inserted * np.tan(phi / 2.0), nan=0.0, posinf=0.0),
+                "travel_mm": np.nan_to_num(inserted * phi / 2.0, nan=0.0, posinf=0.0),
             }
             | extra,
         )

@@ -112,6 +112,49 @@ def test_an_arc_run_at_cruise_costs_nothing(nc):
     assert pr.cycle_time == pytest.approx(2 * 0.015 + (20.0 - 0.45) / 30.0, rel=1e-4)
 
 
+def test_a_line_turning_towards_an_arcs_centre_corners_on_its_secant(nc):
+    """A quarter circle of R 5 (G2 from (0, 5) to (5, 0) about the origin), then a 0.4 mm
+    line turned 4 degrees towards the centre, at F 50 mm/s. Between the tangents the blend
+    would be a 4 degree corner (theta_tan = 88 deg, d = 0.2 mm, R = 5.73 mm: F). LinuxCNC
+    (blendInit3FromArcLine) lays it on the arc's secant instead: the line bends towards the
+    centre (convex), phi_max = min(2/3 of pi/2, theta_tan) = 1.047198, theta = 1.535890 -
+    phi_max / 4 = 1.274090; d_tol = cos(theta) 0.01 / (1 - sin(theta)) = 0.066912 mm (the
+    arc side reaches sin(phi_max / 4) 5 = 1.294 mm, the line 0.2 mm), R = tan(theta) d =
+    0.218860 mm, v = sqrt(2000 R) = 20.922 mm/s. (LHchips4's G19 quarter arcs, recorded:
+    26.9 mm/s where ncperf had 83.)"""
+    b = math.radians(4.0)
+    end = (5.0 - 0.4 * math.sin(b), -0.4 * math.cos(b), 0.0)
+    tp = g64(
+        [
+            {
+                "start": (0.0, 5.0, 0.0),
+                "end": (5.0, 0.0, 0.0),
+                "center": (0.0, 0.0, 0.0),
+                "ccw": False,
+            },
+            {"end": end},
+        ],
+        feed=50.0,
+    )
+    ind = tangential(nc, tp, lcnc())
+    assert ind.feed[0] == pytest.approx(math.sqrt(2000.0 * 0.218860), rel=1e-4)
+    # turned away from the centre (concave) the tangents' corner stands: F
+    end_out = (5.0 + 0.4 * math.sin(b), -0.4 * math.cos(b), 0.0)
+    tp_out = g64(
+        [
+            {
+                "start": (0.0, 5.0, 0.0),
+                "end": (5.0, 0.0, 0.0),
+                "center": (0.0, 0.0, 0.0),
+                "ccw": False,
+            },
+            {"end": end_out},
+        ],
+        feed=50.0,
+    )
+    assert tangential(nc, tp_out, lcnc()).feed[0] > 45.0
+
+
 def test_a_binding_arc_is_run_at_its_speed(nc):
     """A 90-degree corner of two 10 mm lines at F 100: the arc binds (6.949 mm/s, as above;
     LinuxCNC caps its speed there), so it is held over its whole tangent length as the
