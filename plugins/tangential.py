@@ -74,6 +74,8 @@ The servo period is the machine's block time over ``TP_MIN_SEGMENT_CYCLES`` = 1.
 
 from __future__ import annotations
 
+import weakref
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -169,21 +171,42 @@ def corner_feed(
     limit : (m,) int
         Index into :data:`LABELS`.
     """
-    m = radius.shape[0]
+    return _corner_feed(corner_shares(t1, t2), radius, machine)
+
+
+def corner_shares(t1: NDArray[np.float64], t2: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+    """The machine-free part of :func:`corner_feed`: (m, 3) every axis's largest share of
+    the tangent and of the normal over the inserted arc of each corner."""
+    m = t1.shape[0]
     if m > CHUNK:
         # Each corner on its own: in pieces, the (m, 9) temporaries stay small (the same
         # arithmetic row by row; 1M corners: 150 MB less at the peak).
+        share_t, share_n = np.empty((m, 3)), np.empty((m, 3))
+        for a in range(0, m, CHUNK):
+            b = min(a + CHUNK, m)
+            share_t[a:b], share_n[a:b] = corner_shares(t1[a:b], t2[a:b])
+        return share_t, share_n
+    beta = g.angle_between(t1, t2)
+    u = _in_plane_normal(t1, t2)
+    b = beta[:, None]
+    return g.max_share(t1, u, b), g.max_share(u, -t1, b)
+
+
+def _corner_feed(
+    shares: tuple[NDArray, NDArray], radius: NDArray[np.float64], machine: Machine
+) -> tuple[NDArray[np.float64], NDArray[np.int64]]:
+    """:func:`corner_feed` from the corners' :func:`corner_shares`."""
+    m = radius.shape[0]
+    if m > CHUNK:
+        # in pieces, as the shares (the same arithmetic row by row)
         feed = np.empty(m)
         limit = np.empty(m, dtype=np.int64)
         for a in range(0, m, CHUNK):
             b = min(a + CHUNK, m)
-            feed[a:b], limit[a:b] = corner_feed(t1[a:b], t2[a:b], radius[a:b], machine)
+            piece = (shares[0][a:b], shares[1][a:b])
+            feed[a:b], limit[a:b] = _corner_feed(piece, radius[a:b], machine)
         return feed, limit
-    beta = g.angle_between(t1, t2)
-    u = _in_plane_normal(t1, t2)
-    b = beta[:, None]
-    share_t = g.max_share(t1, u, b)
-    share_n = g.max_share(u, -t1, b)
+    share_t, share_n = shares
     R = radius[:, None]
     inf = np.inf
     # An axis with no share over the arc sets no limit.
@@ -422,6 +445,28 @@ def _arc_blend_possible(tp: ToolPath, j: NDArray[np.int64]) -> NDArray[np.bool_]
     return ok
 
 
+#: The corners' :func:`corner_shares` of tool paths evaluated more than once (a diagnosis
+#: fits effects on hundreds of machines, one path), kept while the path lives; a path seen
+#: once (analyze) keeps nothing (1M corners: 48 MB).
+_SHARES: weakref.WeakKeyDictionary[ToolPath, tuple[NDArray, NDArray, NDArray]] = (
+    weakref.WeakKeyDictionary()
+)
+_SEEN: weakref.WeakSet[ToolPath] = weakref.WeakSet()
+
+
+def _shares_of(tp: ToolPath, j: NDArray[np.int64]) -> tuple[NDArray, NDArray]:
+    """:func:`corner_shares` of the corners ``j`` of ``tp``, the second time on kept."""
+    kept = _SHARES.get(tp)
+    if kept is not None and np.array_equal(kept[0], j):
+        return kept[1], kept[2]
+    shares = corner_shares(tp.tangent_end[j], tp.tangent_start[j + 1])
+    if tp in _SEEN:
+        _SHARES[tp] = (j, *shares)
+    else:
+        _SEEN.add(tp)
+    return shares
+
+
 @hookimpl
 def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     """Model 1 at every junction whose direction changes by more than TOL.collinear_angle."""
@@ -449,7 +494,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     else:
         shorter = np.minimum(tp.length[j], tp.length[j + 1])
         radius = inserted = inserted_radius(beta, shorter, tit)
-    feed, limit = corner_feed(tp.tangent_end[j], tp.tangent_start[j + 1], radius, machine)
+    feed, limit = _corner_feed(_shares_of(tp, j), radius, machine)
     labels = LABELS
     extra = {}
     if tangent is not None:

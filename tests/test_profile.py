@@ -232,3 +232,31 @@ def test_linuxcnc_g61_corner_is_a_stop_named_for_the_path_mode(models):
     assert k.size == 1 and ev.junction_feed[k[0]] == 0.0
     assert ev.labels[ev.junction_limit[k[0]]] == "exact path: no blending"
     assert set(ev.junction[ev.junction_feed < 50.0].tolist()) == {corner}
+
+
+@pytest.mark.parametrize("rising", [True, False])
+def test_ramp_place_guess_gives_the_halvings_bracket(rising):
+    """speed_at's place inside a jerk-limited ramp: the checked Newton guess of _bisect_ramp
+    ends in the bracket the halvings alone end in, bit for bit -- on ramps of every size,
+    including speed changes of 1e-6 mm/s whose place is rounding noise (those are bisected),
+    places at the ramp's ends and beyond them, and a NaN."""
+    from core.engine.profile import _bisect_ramp, _halvings, _place_terms, s_curve_shape
+
+    rng = np.random.default_rng(7)
+    n = 20_000
+    lo = np.where(rng.random(n) < 0.3, 0.0, rng.uniform(0.0, 200.0, n))
+    dv = 10.0 ** rng.uniform(-6.0, 2.5, n)
+    acc = rng.uniform(100.0, 5000.0, n)
+    jerk = np.where(rng.random(n) < 0.2, np.inf, rng.uniform(1e3, 1e6, n))
+    a = acc * rng.uniform(0.3, 1.0, n)  # the effective acceleration
+    vb = lo + dv * np.where(rng.random(n) < 0.5, 0.0, rng.random(n))
+    span = dv * dv / a
+    shape = s_curve_shape(dv, acc, jerk)
+    length = ((lo + dv) ** 2 - vb * vb) / (2 * a)
+    target = length * rng.uniform(-0.1, 1.1, n)
+    target[::97] = 0.0
+    target[5] = np.nan
+    goal = target if rising else -target
+    a_p, b_p = _bisect_ramp(lo, dv, a, vb * vb, span, shape, goal, rising)
+    a_h, b_h = _halvings(_place_terms(lo, dv, a, vb * vb, span, shape), goal, rising)
+    assert np.array_equal(a_p, a_h) and np.array_equal(b_p, b_h)

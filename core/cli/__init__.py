@@ -5,6 +5,14 @@ The top of the flow: it may import everything in :mod:`core`; nothing in core im
 
 from __future__ import annotations
 
-from core.cli.main import main
+import os
+
+# One BLAS thread, unless the user chose otherwise (before numpy loads OpenBLAS, which reads
+# it then): ncperf's matrix products are small -- the alignment's, a few thousand samples
+# by a few hundred path points by 3 -- and OpenBLAS's threads cost more than they bring
+# (the diagnose benchmark's alignment on 2 cores: 11.8-17.0 s wall with them, 7.6 s without).
+os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+from core.cli.main import main  # noqa: E402
 
 __all__ = ["main"]

@@ -234,9 +234,20 @@ def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples) 
     cands = [np.zeros(3), q[0] - tp.start[0], np.median(q, axis=0) - np.median(pts, axis=0)]
     sub = q[:: max(1, q.shape[0] // 2000)]
     sub_lines = None if lines is None else lines[:: max(1, q.shape[0] // 2000)]
+    # the projections of the subsample at every offset tried, by its bytes: an offset tried
+    # again (the first sample at the program's start: the second candidate is the first;
+    # the first iteration starts from a candidate) is not projected again
+    done: dict[bytes, tuple[NDArray, NDArray]] = {}
+
+    def projected(off: NDArray) -> tuple[NDArray, NDArray]:
+        key = off.tobytes()
+        if key not in done:
+            done[key] = _project(tp, sub - off, sub_lines, path)
+        return done[key]
+
     meds = []
     for off in cands:
-        _, d = _project(tp, sub - off, sub_lines, path)
+        _, d = projected(off)
         meds.append(float(np.median(d)))
     # No offset unless a candidate fits clearly better: along a direction the path does not
     # constrain (a program along one line) every offset fits alike, and none is the answer.
@@ -246,13 +257,13 @@ def _offset(tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples) 
     # projections sideways), so the fit runs to convergence, not a fixed count: six halvings
     # left 0.11 mm on a real 840D recording.
     for _ in range(OFFSET_ITERATIONS):
-        s, _ = _project(tp, sub - off, sub_lines, path)
+        s, _ = projected(off)
         near = tp.point_at(s)
         step = np.median(sub - off - near, axis=0)
         off = off + step
         if np.linalg.norm(step) < TOL.offset_step:
             break
-    _, d_off = _project(tp, sub - off, sub_lines, path)
+    _, d_off = projected(off)
     if meds[0] - float(np.median(d_off)) <= OFFSET_GAIN:
         return np.zeros(3)
     return off

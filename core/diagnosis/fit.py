@@ -17,8 +17,9 @@ from numpy.typing import NDArray
 from core.diagnosis.objective import FEED, Objective
 from core.diagnosis.rules import GRID_1D, GRID_2D, GRID_ND, REFINE
 from core.engine.effects import Effect, Param, Setup
-from core.engine.indicators import IndicatorSource
+from core.engine.indicators import Indicator, IndicatorSource
 from core.engine.predict import Prediction, predict, retimed, same_plan
+from core.model.machine import Machine
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 
@@ -71,6 +72,7 @@ def fit(
     feed gap)."""
     m = base.machine
     defaults = eff.start(m)
+    indicators_of = _remembered(indicators_of)
     # the gap and setup of every candidate scored (not its predictions: hundreds of
     # profiles; those of the best are made again, the same, at the end)
     cache: dict[tuple, tuple[float, Setup]] = {}
@@ -115,6 +117,22 @@ def fit(
             best = min([best, *line], key=score)
     best = _refined(eff, best, defaults, score)
     return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
+
+
+def _remembered(indicators_of: IndicatorSource) -> IndicatorSource:
+    """``indicators_of`` that gives the indicators of the last tool path and machine again
+    (the same objects: a look-ahead, path compression or acceleration share evaluates the
+    same path on the same machine for every candidate), in a list of its own."""
+    last: list[tuple[ToolPath, Machine, list[Indicator]]] = []
+
+    def source(tp: ToolPath, machine: Machine) -> list[Indicator]:
+        if last and last[0][0] is tp and last[0][1] is machine:
+            return list(last[0][2])
+        out = indicators_of(tp, machine)
+        last[:] = [(tp, machine, list(out))]
+        return out
+
+    return source
 
 
 def _staged(

@@ -155,6 +155,68 @@ def s_curve_big_g(p: ArrayLike, shape: tuple[NDArray, ...]) -> NDArray[np.float6
     )
 
 
+#: Halvings of :func:`_bisect_ramp`: the share p of a ramp to 2^-26 (1.5e-8) of it.
+HALVINGS = 26
+#: Newton steps of the guess :func:`_bisect_ramp` checks before it bisects: from the
+#: trapezoid ramp's place (off by ~1e-2 of the ramp), three leave 8 % of the places of the
+#: diagnose benchmark (a jerk-limited machine) to the halvings -- half of them on ramps of
+#: ~1e-5 mm/s, whose place is rounding noise -- four 5 %, for more work than they save.
+NEWTON_STEPS = 3
+
+
+def _place_terms(
+    lo: NDArray, dv: NDArray, a: NDArray, vb2: NDArray, span: NDArray, shape: tuple[NDArray, ...]
+) -> tuple[NDArray, ...]:
+    """What :func:`_place` needs of a ramp that does not change with p (computed once)."""
+    r, c, rs = shape
+    return (lo, dv, 2 * a, vb2, span, r, c, 6 * rs, c * r * r / 6, r * r, 0.5 * r, 1.0 - r)
+
+
+def _place(
+    p: NDArray, terms: tuple[NDArray, ...], rising: bool, out: tuple[NDArray, ...]
+) -> NDArray:
+    """x(p) of :func:`_bisect_ramp` (negated braking) into ``out[0]`` (``out``: four
+    (m,) work arrays): the same operations on every element as evaluating the formula
+    array-wide, each branch of G only where it applies."""
+    lo, dv, two_a, vb2, span, r, c, six_rs, inner0, rr, half_r, one_r = terms
+    x, pp, big_g, t = out
+    # x = (v^2 - vb2) / (2 a), v = lo + p dv (rising) or lo + (1 - p) dv
+    if rising:
+        np.multiply(p, dv, out=x)
+    else:
+        np.subtract(1.0, p, out=x)
+        np.multiply(x, dv, out=x)
+    np.add(lo, x, out=x)
+    np.multiply(x, x, out=x)
+    np.subtract(x, vb2, out=x)
+    np.divide(x, two_a, out=x)
+    # G: the middle branch everywhere, then the ends of the ramp where p is in them
+    np.multiply(p, p, out=pp)
+    np.subtract(pp, rr, out=big_g)
+    np.multiply(big_g, 0.5, out=big_g)
+    np.subtract(p, r, out=t)
+    np.multiply(half_r, t, out=t)
+    np.subtract(big_g, t, out=big_g)
+    np.multiply(c, big_g, out=big_g)
+    np.add(inner0, big_g, out=big_g)
+    first = p < r
+    i = np.flatnonzero(first)
+    if i.size:
+        big_g[i] = c[i] * p[i] ** 3 / six_rs[i]
+    i = np.flatnonzero(~first & (p > one_r))
+    if i.size:
+        qi = 1.0 - p[i]
+        big_g[i] = 0.5 - qi + c[i] * qi**3 / six_rs[i]
+    # x += span (G - p^2 / 2)   (0.5 p p: exactly half of p p)
+    np.multiply(pp, 0.5, out=pp)
+    np.subtract(big_g, pp, out=big_g)
+    np.multiply(span, big_g, out=big_g)
+    np.add(x, big_g, out=x)
+    if not rising:
+        np.negative(x, out=x)
+    return x
+
+
 def _bisect_ramp(
     lo: NDArray,
     dv: NDArray,
@@ -166,67 +228,76 @@ def _bisect_ramp(
     rising: bool,
 ) -> tuple[NDArray, NDArray]:
     """The bracket (a_p, b_p) of the share p of a jerk-limited ramp where it is at the place
-    ``goal`` (:meth:`Profile.speed_at`): 26 halvings (p to 1.5e-8 of the ramp) of where
+    ``goal`` (:meth:`Profile.speed_at`): HALVINGS halvings of where
 
         x(p) = (v(p)^2 - vb2) / (2 a) + span (G(p) - p^2 / 2),  v(p) = lo + p dv rising,
         lo + (1 - p) dv braking (x negated), G = :func:`s_curve_big_g`,
 
-    is below ``goal``. The same operations on every element as evaluating those formulas
-    array-wide (the terms that do not change with p computed once), each branch of G only
-    where it applies."""
-    r, c, rs = shape
-    six_rs = 6 * rs
-    inner0 = c * r * r / 6
-    rr = r * r
-    half_r = 0.5 * r
-    one_r = 1.0 - r
-    two_a = 2 * a
-    n = lo.size
+    is below ``goal`` (:func:`_place`). The bracket the halvings end in is found without
+    them where it can be told for certain (:func:`_checked_guess`), the others bisected."""
+    terms = _place_terms(lo, dv, a, vb2, span, shape)
+    a_p, b_p, ok = _checked_guess(terms, shape, goal, rising)
+    todo = np.flatnonzero(~ok)
+    if todo.size:
+        a_p[todo], b_p[todo] = _halvings(tuple(x[todo] for x in terms), goal[todo], rising)
+    return a_p, b_p
+
+
+def _halvings(terms: tuple[NDArray, ...], goal: NDArray, rising: bool) -> tuple[NDArray, NDArray]:
+    """The bisection of :func:`_bisect_ramp`, HALVINGS halvings from (0, 1)."""
+    n = goal.size
     a_p, b_p = np.zeros(n), np.ones(n)
-    p, pp, x, big_g, t = (np.empty(n) for _ in range(5))
+    p = np.empty(n)
+    work = tuple(np.empty(n) for _ in range(4))
     below = np.empty(n, dtype=bool)
-    for _ in range(26):
+    for _ in range(HALVINGS):
         np.add(a_p, b_p, out=p)
         np.multiply(p, 0.5, out=p)
-        # x = (v^2 - vb2) / (2 a), v = lo + p dv (rising) or lo + (1 - p) dv
-        if rising:
-            np.multiply(p, dv, out=x)
-        else:
-            np.subtract(1.0, p, out=x)
-            np.multiply(x, dv, out=x)
-        np.add(lo, x, out=x)
-        np.multiply(x, x, out=x)
-        np.subtract(x, vb2, out=x)
-        np.divide(x, two_a, out=x)
-        # G: the middle branch everywhere, then the ends of the ramp where p is in them
-        np.multiply(p, p, out=pp)
-        np.subtract(pp, rr, out=big_g)
-        np.multiply(big_g, 0.5, out=big_g)
-        np.subtract(p, r, out=t)
-        np.multiply(half_r, t, out=t)
-        np.subtract(big_g, t, out=big_g)
-        np.multiply(c, big_g, out=big_g)
-        np.add(inner0, big_g, out=big_g)
-        first = p < r
-        i = np.flatnonzero(first)
-        if i.size:
-            big_g[i] = c[i] * p[i] ** 3 / six_rs[i]
-        i = np.flatnonzero(~first & (p > one_r))
-        if i.size:
-            qi = 1.0 - p[i]
-            big_g[i] = 0.5 - qi + c[i] * qi**3 / six_rs[i]
-        # x += span (G - p^2 / 2)   (0.5 p p: exactly half of p p)
-        np.multiply(pp, 0.5, out=pp)
-        np.subtract(big_g, pp, out=big_g)
-        np.multiply(span, big_g, out=big_g)
-        np.add(x, big_g, out=x)
-        if not rising:
-            np.negative(x, out=x)
+        x = _place(p, terms, rising, work)
         np.less(x, goal, out=below)
         np.copyto(a_p, p, where=below)
         np.logical_not(below, out=below)
         np.copyto(b_p, p, where=below)
     return a_p, b_p
+
+
+def _checked_guess(
+    terms: tuple[NDArray, ...], shape: tuple[NDArray, ...], goal: NDArray, rising: bool
+) -> tuple[NDArray, NDArray, NDArray]:
+    """The bracket the halvings of :func:`_bisect_ramp` end in, where a guess can be
+    checked to be it, and which are (a_p, b_p, ok).
+
+    The place x(p) of the formula, computed exactly, does not decrease with p (its
+    derivative is dv / a times the S curve's speed, >= 0 for lo >= 0, dv >= 0, a > 0); the
+    computed one is within E of it (E: the rounding of its ~30 operations, ~30 ulps of the
+    terms' size T = ((lo + dv)^2 + vb2) / (2 a) + |span|). So where a bracket (a, b) of the
+    last halving has x(a) < goal - 2 E and x(b) >= goal + 2 E as computed, every halving
+    point at or left of a is below the goal and every one at or right of b is not: the
+    halvings take the same steps to it. The guess: the trapezoid ramp's place, then
+    NEWTON_STEPS Newton steps on x(p) = goal; the margin TOL.sure_compare x T (far above
+    2 E). Where a check fails (the goal within the margin of a bracket's end, a guess off,
+    or values not finite), ok is False and the caller bisects."""
+    lo, dv, two_a, vb2, span = terms[:5]
+    n = goal.size
+    work = tuple(np.empty(n) for _ in range(4))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        dist = goal if rising else -goal
+        u = (np.sqrt(np.maximum(vb2 + two_a * dist, 0.0)) - lo) / dv  # trapezoid
+        p = np.clip(np.nan_to_num(u if rising else 1.0 - u), 0.0, 1.0)
+        rate = dv / (0.5 * two_a)  # dx/dp = rate x (the S curve's speed)
+        for _ in range(NEWTON_STEPS):
+            g = s_curve_g(p, shape)
+            speed = lo + dv * (g if rising else 1.0 - g)
+            step = (_place(p, terms, rising, work) - goal) / (rate * speed)
+            p = np.clip(np.nan_to_num(p - step), 0.0, 1.0)
+        full = float(1 << HALVINGS)
+        a_p = np.minimum(np.floor(p * full), full - 1.0) / full
+        b_p = a_p + 1.0 / full
+        margin = TOL.sure_compare * (((lo + dv) ** 2 + vb2) / two_a + np.abs(span))
+        sane = (two_a > 0) & (lo >= 0) & (dv >= 0) & np.isfinite(margin)
+        ok = sane & ((a_p == 0.0) | (_place(a_p, terms, rising, work) < goal - margin))
+        ok &= (b_p == 1.0) | (_place(b_p, terms, rising, work) >= goal + margin)
+    return a_p, b_p, ok
 
 
 def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[NDArray, NDArray]:

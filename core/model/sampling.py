@@ -27,6 +27,19 @@ NEAR_BLOCK = 65536
 #: covers the rounding of the distances it compares.
 COARSE = 5
 NEAR_SLACK = 1e-9
+#: :meth:`PathSamples.project_near` first looks at the NEAR_FIRST points on either side of
+#: the guess (the nearest is one of them for 98 % of a filtered prediction's points); that
+#: is the answer where every other point of the window is certainly further away: those
+#: CLEAR_FROM or more points from it along the path, by their distance to it
+#: (:meth:`PathSamples._clearance`), those nearer by having been looked at.
+NEAR_FIRST = 3
+CLEAR_FROM = 2
+#: ... where it pays: the first look costs 2 NEAR_FIRST + 1 distances a point, the window's
+#: search ~17, so a block of points takes it where it answers for NEAR_WORTH of every
+#: NEAR_PROBE-th point (a servo lag of 0.2 s puts the filtered positions a millimetre off
+#: the path, where it answers for few).
+NEAR_PROBE = 64
+NEAR_WORTH = 0.5
 #: Relative margin on the polyline lengths that bound distances along the path (their sums'
 #: rounding).
 REACH_SLACK = 1e-12
@@ -85,16 +98,13 @@ class PathSamples:
         half = int(half_width / self.step)
         if not (np.isfinite(q).all() and np.isfinite(s_guess).all()):
             return self._project_near_gathered(q, s_guess, half)
-        # Every COARSE-th offset of the window for all points, then the offsets between two
-        # of them only for the points they might be nearer for: by the triangle inequality
-        # none of them is nearer than half (sum of the two distances - the path length
-        # between the two points). Ties go to the earlier offset, as an argmin over the
-        # whole window would: the same point as before.
-        last = s_p.size - 1
-        coarse = list(range(-half, half + 1, COARSE))
-        if coarse[-1] != half:
-            coarse.append(half)
-        reach = self._reach
+        # The nearest few points first, where that pays and tells (:meth:`_near_first`);
+        # elsewhere the window (:meth:`_window`): every COARSE-th offset of it for all
+        # points, then the offsets between two of them only for the points they might be
+        # nearer for: by the triangle inequality none of them is nearer than half (sum of
+        # the two distances - the path length between the two points). Ties go to the
+        # earlier offset, as an argmin over the whole window would: the same point as
+        # before.
         s = np.empty(q.shape[0])
         dist = np.empty(q.shape[0])
         for c in range(0, q.shape[0], NEAR_BLOCK):
@@ -102,46 +112,141 @@ class PathSamples:
             qx, qy, qz = q[part, 0], q[part, 1], q[part, 2]
             guess = s_guess[part]
             j = np.searchsorted(s_p, guess)
-            best_key = best_d2 = np.empty(0)
-            best_i = np.empty(0, dtype=np.int64)
-            best_o = np.full(j.size, -half)
-            seen = []
-            for off in coarse:
-                cand = np.clip(j + off, 0, last)
-                key, d2 = self._key(cand, qx, qy, qz, guess)
-                seen.append((cand, np.sqrt(d2)))
-                if off == -half:
-                    # (copies: ``seen`` keeps this offset's candidates)
-                    best_key, best_d2, best_i = key, d2, cand.copy()
-                    continue
-                better = key < best_key
-                best_key[better] = key[better]
-                best_d2[better] = d2[better]
-                best_i[better] = cand[better]
-                best_o[better] = off
-            for (o1, o2), (c1, d1), (_, d2) in zip(
-                zip(coarse[:-1], coarse[1:], strict=True), seen[:-1], seen[1:], strict=True
-            ):
-                if o2 - o1 < 2:
-                    continue
-                low = 0.5 * (d1 + d2 - reach[c1]) - NEAR_SLACK
-                rows = np.flatnonzero(~((low > 0) & (low * low > best_key)))
-                if rows.size == 0:
-                    continue
-                jr, qxr, qyr, qzr, gr = j[rows], qx[rows], qy[rows], qz[rows], guess[rows]
-                for off in range(o1 + 1, o2):
-                    cand = np.clip(jr + off, 0, last)
-                    key, d2r = self._key(cand, qxr, qyr, qzr, gr)
-                    bk = best_key[rows]
-                    better = (key < bk) | ((key == bk) & (off < best_o[rows]))
-                    r = rows[better]
-                    best_key[r] = key[better]
-                    best_d2[r] = d2r[better]
-                    best_i[r] = cand[better]
-                    best_o[r] = off
+            probe = slice(None, None, NEAR_PROBE)
+            _, _, ok = self._near_first(
+                j[probe], qx[probe], qy[probe], qz[probe], guess[probe], half
+            )
+            if ok.size and ok.mean() >= NEAR_WORTH:
+                best_i, best_d2, ok = self._near_first(j, qx, qy, qz, guess, half)
+            else:
+                best_i, best_d2 = np.empty(j.size, dtype=np.int64), np.empty(j.size)
+                ok = np.zeros(j.size, dtype=bool)
+            rest = np.flatnonzero(~ok)
+            if rest.size:
+                best_i[rest], best_d2[rest] = self._window(
+                    j[rest], qx[rest], qy[rest], qz[rest], guess[rest], half
+                )
             s[part] = s_p[best_i]
             dist[part] = np.sqrt(best_d2)
         return s, dist
+
+    def _near_first(
+        self,
+        j: NDArray[np.int64],
+        qx: NDArray[np.float64],
+        qy: NDArray[np.float64],
+        qz: NDArray[np.float64],
+        guess: NDArray[np.float64],
+        half: int,
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64], NDArray[np.bool_]]:
+        """The nearest (by :meth:`_key`, ties to the earlier point) of the NEAR_FIRST points
+        on either side of path point ``j``, its squared distance, and where it is the
+        nearest of the whole window of ``half`` points on either side: the points within
+        CLEAR_FROM - 1 of it were looked at, and every other is further from it than
+        CLEAR_FROM points' :meth:`_clearance`, hence (triangle inequality) from ``q``
+        further than that minus its distance -- kept clear of the best key by NEAR_SLACK
+        (the rounding of the distances compared), as :meth:`project_near` bounds."""
+        last = self.s.size - 1
+        n = j.size
+        if half < NEAR_FIRST:
+            return np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n, dtype=bool)
+        best_key = best_d2 = np.empty(0)
+        best_i = np.empty(0, dtype=np.int64)
+        for off in range(-NEAR_FIRST, NEAR_FIRST + 1):
+            cand = np.clip(j + off, 0, last)
+            key, d2 = self._key(cand, qx, qy, qz, guess)
+            if off == -NEAR_FIRST:
+                best_key, best_d2, best_i = key, d2, cand
+                continue
+            better = key < best_key  # (ties: the earlier offset, the earlier point)
+            best_key[better] = key[better]
+            best_d2[better] = d2[better]
+            best_i[better] = cand[better]
+        # the points within CLEAR_FROM - 1 of the best (on the path) were looked at
+        seen_lo = np.maximum(j - NEAR_FIRST, 0)
+        seen_hi = np.minimum(j + NEAR_FIRST, last)
+        near = CLEAR_FROM - 1
+        ok = np.maximum(best_i - near, 0) >= seen_lo
+        ok &= np.minimum(best_i + near, last) <= seen_hi
+        # the window's others: from j +-half, at most half + NEAR_FIRST points from the best
+        low = self._clearance(half + NEAR_FIRST)[best_i] - np.sqrt(best_d2) - NEAR_SLACK
+        ok &= (low > 0) & (low * low > best_key)
+        return best_i, best_d2, ok
+
+    def _clearance(self, reach: int) -> NDArray[np.float64]:
+        """(p,) every point's distance to the nearest point CLEAR_FROM to ``reach`` points
+        away along the path (inf where there is none); kept per ``reach``."""
+        hit = self._clearances.get(reach)
+        if hit is None:
+            pts = self.points
+            c2 = np.full(pts.shape[0], np.inf)
+            for o in range(CLEAR_FROM, min(reach, pts.shape[0] - 1) + 1):
+                d = pts[o:] - pts[:-o]
+                d2 = np.einsum("ij,ij->i", d, d)
+                np.minimum(c2[:-o], d2, out=c2[:-o])
+                np.minimum(c2[o:], d2, out=c2[o:])
+            hit = self._clearances[reach] = np.sqrt(c2)
+        return hit
+
+    @cached_property
+    def _clearances(self) -> dict[int, NDArray[np.float64]]:
+        return {}
+
+    def _window(
+        self,
+        j: NDArray[np.int64],
+        qx: NDArray[np.float64],
+        qy: NDArray[np.float64],
+        qz: NDArray[np.float64],
+        guess: NDArray[np.float64],
+        half: int,
+    ) -> tuple[NDArray[np.int64], NDArray[np.float64]]:
+        """The nearest point (by :meth:`_key`, ties to the earlier point) of the window of
+        ``half`` points on either side of path point ``j``, and its squared distance."""
+        s_p = self.s
+        last = s_p.size - 1
+        coarse = list(range(-half, half + 1, COARSE))
+        if coarse[-1] != half:
+            coarse.append(half)
+        reach = self._reach
+        best_key = best_d2 = np.empty(0)
+        best_i = np.empty(0, dtype=np.int64)
+        best_o = np.full(j.size, -half)
+        seen = []
+        for off in coarse:
+            cand = np.clip(j + off, 0, last)
+            key, d2 = self._key(cand, qx, qy, qz, guess)
+            seen.append((cand, np.sqrt(d2)))
+            if off == -half:
+                # (copies: ``seen`` keeps this offset's candidates)
+                best_key, best_d2, best_i = key, d2, cand.copy()
+                continue
+            better = key < best_key
+            best_key[better] = key[better]
+            best_d2[better] = d2[better]
+            best_i[better] = cand[better]
+            best_o[better] = off
+        for (o1, o2), (c1, d1), (_, d2) in zip(
+            zip(coarse[:-1], coarse[1:], strict=True), seen[:-1], seen[1:], strict=True
+        ):
+            if o2 - o1 < 2:
+                continue
+            low = 0.5 * (d1 + d2 - reach[c1]) - NEAR_SLACK
+            rows = np.flatnonzero(~((low > 0) & (low * low > best_key)))
+            if rows.size == 0:
+                continue
+            jr, qxr, qyr, qzr, gr = j[rows], qx[rows], qy[rows], qz[rows], guess[rows]
+            for off in range(o1 + 1, o2):
+                cand = np.clip(jr + off, 0, last)
+                key, d2r = self._key(cand, qxr, qyr, qzr, gr)
+                bk = best_key[rows]
+                better = (key < bk) | ((key == bk) & (off < best_o[rows]))
+                r = rows[better]
+                best_key[r] = key[better]
+                best_d2[r] = d2r[better]
+                best_i[r] = cand[better]
+                best_o[r] = off
+        return best_i, best_d2
 
     def _key(
         self,

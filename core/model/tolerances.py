@@ -81,6 +81,12 @@ class Tolerances:
     #: one or two operations (a share of F, a full turn): a few ulps, 1e-12.
     float_slack: float = 1e-12
 
+    #: Relative margin by which a value computed in a few dozen float operations must clear
+    #: the value it is compared with for the comparison to be the one exact arithmetic would
+    #: give (the rounding is ~30 ulps, 7e-15, of the terms' size): a ramp's place against
+    #: a goal (:func:`core.engine.profile._bisect_ramp`).
+    sure_compare: float = 1e-13
+
     #: Speeds and speed changes (mm/s) below this are nil: a nanometre per second.
     nil_speed: float = 1e-9
 
