@@ -684,7 +684,16 @@ class _Printable(io.TextIOBase):
         return int(self._stream.fileno())
 
 
+#: Threads of numpy's BLAS (OpenBLAS) in a command, unless the environment sets them: its
+#: products here are tall and thin ((n, 3) @ (3, 2), the SVG's projection), which one thread
+#: does in milliseconds, while the extra threads' busy waiting after every call took a core
+#: from the analysis on a busy machine (1M moves on 2 cores: the projection 0.5 s, not 0.01).
+BLAS_THREADS = "1"
+
+
 def main(argv: list[str] | None = None) -> int:
+    # (read when numpy loads its BLAS: before any command imports numpy)
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", BLAS_THREADS)
     out, err = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = _Printable(out), _Printable(err)
     try:
