@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adapters.gcode import words as W
+from adapters.gcode.numbers import read_numbers
 from adapters.source import Source, check_bytes
 
 SPACE, TAB, CR, LF, VT, FF = 32, 9, 13, 10, 11, 12
@@ -162,9 +163,22 @@ def tokenize(src: Source) -> Words:
         bad.update(_lines_of(lfpos, orphan).tolist())
 
     del brk_mask, after, orphan
-    numbers = text.translate(_NUMBERS)
     values = None
-    for attempt in range(2):
+    # The numbers straight from the text (adapters.gcode.numbers); where one is not well
+    # formed, C's parse of them all and the search for the lines to blame below.
+    want = ~empty
+    if bad:
+        want &= ~np.isin(wline, np.array(sorted(bad), dtype=np.int64))
+    if want.all():
+        values = read_numbers(text, lpos, span_end)
+    elif want.any():
+        vals = read_numbers(text, lpos[want], span_end[want])
+        if vals is not None:
+            values = np.full(lpos.size, np.nan)
+            values[want] = vals
+            del vals
+    numbers = text.translate(_NUMBERS) if values is None else b""
+    for attempt in range(2 if values is None else 0):
         bad_arr = np.array(sorted(bad), dtype=np.int64)
         if bad_arr.size:
             sep = np.frombuffer(numbers, dtype=np.uint8).copy()
