@@ -104,7 +104,11 @@ def _plain_text(src: Source, special: NDArray[np.bool_]) -> bytes:
         # Every well-formed comment goes; a parenthesis left over marks its line. (A line
         # whose parentheses alternate "(...)(...)" loses them all; one that nests or does
         # not close keeps one at least.)
-        text = _COMMENT.sub(b"", text)
+        # (from the first "(" to the last ")": every comment is there, the rest is not
+        # searched; a CAM program's header comment, then 1M plain lines)
+        first, end = text.find(b"("), text.rfind(b")") + 1
+        if 0 <= first < end:
+            text = text[:first] + _COMMENT.sub(b"", text[first:end]) + text[end:]
         if b"(" in text or b")" in text:
             t = np.frombuffer(text, dtype=np.uint8)
             lf = np.flatnonzero(t == LF)
