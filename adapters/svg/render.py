@@ -484,28 +484,37 @@ def render_ints(values: ArrayLike, suffix: ArrayLike, table: Sequence[bytes]) ->
     end = np.cumsum(size)
     start = end - size
     total = int(end[-1])
-    out = np.empty(total, dtype=np.uint8)
+    # Digits: the one of 10**j of every value at once, j from the highest down, each value's
+    # right-aligned in ``width`` places that end where its own digits end. A shorter value's
+    # leading zeros land on the bytes before it (``width`` spare bytes before the first),
+    # all of which a later write covers: its sign and the suffix before it are written after
+    # the digits, and the digits of the value before it, of a lower j, after these.
+    buf = np.empty(width + total, dtype=np.uint8)
+    pos = start + neg
+    pos += ndig  # (in buf: the place of 10**(width - 1))
+    for p in powers.tolist():
+        d = av // p
+        d %= 10
+        d += ord("0")
+        buf[pos] = d
+        pos += 1
+    del pos
+    out = buf[width:]
     out[start[neg]] = ord("-")
 
-    # Digits right-aligned in a (t, width) table; the kept ones, row by row,
-    # are the digit strings in order, and land where the marks say digits go.
-    digits = ((av[:, None] // powers) % 10 + ord("0")).astype(np.uint8)
-    kept = np.arange(width) >= (width - ndig)[:, None]
-    mark = np.zeros(total + 1, dtype=np.int8)
-    mark[start + neg] += 1
-    mark[start + neg + ndig] -= 1
-    is_digit = np.cumsum(mark[:-1], dtype=np.int8).astype(bool)
-    out[is_digit] = digits[kept]
-
-    # Suffixes: gather their bytes from one blob.
+    # Suffixes: gather their bytes from one blob (those of one byte, most, at once).
     blob = np.frombuffer(b"".join(table), dtype=np.uint8)
     toff = np.cumsum(tlen) - tlen
-    nz = slen > 0
+    after = start + neg
+    after += ndig
+    one = slen == 1
+    out[after[one]] = blob[toff[sfx[one]]]
+    nz = slen > 1
     reps = slen[nz]
     s_total = int(reps.sum())
     if s_total:
         local = np.arange(s_total) - np.repeat(np.cumsum(reps) - reps, reps)
-        dest = np.repeat((start + neg + ndig)[nz], reps) + local
+        dest = np.repeat(after[nz], reps) + local
         out[dest] = blob[np.repeat(toff[sfx[nz]], reps) + local]
     return out.tobytes()
 
