@@ -73,7 +73,8 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     axis = np.empty(j.size, dtype=np.intp)
     for b in pieces(j.size):
         jb = j[b]
-        t = g.unit(tp.tangent_end[jb] + tp.tangent_start[jb + 1])
+        # (np.take: the rows of tp.tangent_end[jb] ..., several times faster)
+        t = g.unit(np.take(tp.tangent_end, jb, axis=0) + np.take(tp.tangent_start, jb + 1, axis=0))
         jerk[b], axis[b] = tangential_jerk(t, machine)
     feed = transition_feed(jerk, machine.curvature_transition_time, jump)
     return [

@@ -279,3 +279,24 @@ def test_progress_line_on_a_terminal_only():
     assert "\rncperf diagnose: fitting servo_lag (9 of 15 effects) [T s]" in out
     assert "\x1b" not in out and out.count("\n") == 1
     assert out.endswith("\r" + " " * len(out.split("\r")[-3]) + "\r")
+
+
+def test_one_blas_thread_unless_the_environment_says():
+    """A command runs numpy's BLAS on one thread (its spare threads' busy waiting took a core
+    from the analysis on a busy 2-core machine), set before numpy loads it; a value in the
+    environment stays."""
+    code = (
+        "import os, sys\n"
+        "from core.cli import main\n"
+        "assert 'numpy' not in sys.modules\n"
+        "main(['machines'])\n"
+        "print(os.environ['OPENBLAS_NUM_THREADS'])\n"
+    )
+    env = {"PYTHONPATH": str(ROOT), "PATH": ""}
+    for given, want in ((None, "1"), ("2", "2")):
+        e = env if given is None else {**env, "OPENBLAS_NUM_THREADS": given}
+        r = subprocess.run(
+            [sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT, env=e
+        )
+        assert r.returncode == 0, r.stderr
+        assert r.stdout.splitlines()[-1] == want

@@ -314,3 +314,19 @@ def test_feed_limit_does_not_touch_reachable_feeds(models):
     tp = path([{"end": (10, 0, 0)}], feed=100.0)
     ev = models.evaluate(tp, machine())
     assert ev.element_indicator[0] == -1
+
+
+def test_cross_is_numpys_bit_for_bit():
+    """core.model.geometry.cross (no input copies) gives np.cross's bits: zeros of both
+    signs, infinities, NaN, broadcasting one row."""
+    from core.model import geometry as g
+
+    rng = np.random.default_rng(8)
+    a = rng.standard_normal((5000, 3)) * 10.0 ** rng.integers(-300, 300, (5000, 3))
+    b = rng.standard_normal((5000, 3))
+    a[::7] = -0.0
+    b[::11, 1] = np.inf
+    a[::13, 2] = np.nan
+    with np.errstate(all="ignore"):
+        for x, y in ((a, b), (b, a), (a, b[:1]), (a[:1], b)):
+            assert g.cross(x, y).tobytes() == np.cross(x, y).tobytes()

@@ -460,6 +460,21 @@ def test_render_ints_matches_python_formatting():
     assert render.render_ints([], [], table) == b""
 
 
+def test_render_ints_short_values_after_long_ones():
+    """Short values after long ones, with no text between (the digits of every value are
+    written right-aligned in the widest value's places, the spare ones landing on the
+    bytes before it): still exactly str(value) + suffix, the first value short too."""
+    rng = np.random.default_rng(4)
+    values = rng.choice([0, 7, -3, 12, -120, 98765432109, -5, 40], 5000)
+    values[0] = 1
+    table = [b"", b"-", b" ", b"ab"]
+    suffix = rng.integers(0, len(table), values.size)
+    want = b"".join(
+        str(v).encode() + table[s] for v, s in zip(values.tolist(), suffix.tolist(), strict=True)
+    )
+    assert render.render_ints(values, suffix, table) == want
+
+
 # ------------------------------------------------------------------ issue 14: what the picture says
 def test_blocks_are_coloured_by_the_profile_by_default(tmp_path):
     """One 10 mm line at F 100 mm/s, A 2500 mm/s^2, no jerk limit, from rest to rest: ramps of

@@ -350,7 +350,8 @@ class Interpreter:
                     int(w.line[np.argmax(motion)]),
                 )
             self._drop(~after)
-        letters = np.unique(w.letter)
+        # np.unique(w.letter) without the sort (2M words: 12 ms, not 32)
+        letters = np.flatnonzero(np.bincount(w.letter, minlength=256)).astype(np.uint8)
         for code in letters:
             ch = chr(code)
             if ch in ALLOWED:
@@ -739,10 +740,11 @@ class Interpreter:
         n = mi.size
         first = np.zeros(3) if self.initial is None else np.array(self.initial.pos)
         # Each move starts where the line before it left the axes (the first line: ``first``).
-        start = self.pos[np.maximum(mi - 1, 0)]
+        # (np.take along axis 0: the rows of self.pos[...], several times faster)
+        start = np.take(self.pos, np.maximum(mi - 1, 0), axis=0)
         if n and mi[0] == 0:
             start[0] = first
-        end = self.pos[mi]
+        end = np.take(self.pos, mi, axis=0)
         kind = self.kind[mi]
         # Only the columns no line fills start from their defaults (empty_columns' values):
         # the others are built once, not over a default (1M moves: 100 MB less at the peak).
@@ -767,10 +769,10 @@ class Interpreter:
         cols["block"] = np.where(n_pres[mi], n_vals[mi], -1).astype(np.int64)
 
         # Unknown start: a feed move before every axis was set.
-        unknown = ~self.known[np.maximum(mi - 1, 0)]
+        unknown = ~np.take(self.known, np.maximum(mi - 1, 0), axis=0)
         unknown[mi == 0] = True if self.initial is None else ~np.array(self.initial.known)
         feedmove = kind != MoveKind.RAPID
-        bad = feedmove & unknown.any(axis=1)
+        bad = feedmove & (unknown[:, 0] | unknown[:, 1] | unknown[:, 2])  # (any, by column)
         if bad.any():
             k = int(np.argmax(bad))
             axes = "".join(a for a, u in zip(AXIS_LETTERS, unknown[k], strict=True) if u)

@@ -19,6 +19,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from adapters.gcode import words as W
+from adapters.gcode.numbers import read_numbers
 from adapters.source import Source, check_bytes
 
 SPACE, TAB, CR, LF, VT, FF = 32, 9, 13, 10, 11, 12
@@ -103,7 +104,11 @@ def _plain_text(src: Source, special: NDArray[np.bool_]) -> bytes:
         # Every well-formed comment goes; a parenthesis left over marks its line. (A line
         # whose parentheses alternate "(...)(...)" loses them all; one that nests or does
         # not close keeps one at least.)
-        text = _COMMENT.sub(b"", text)
+        # (from the first "(" to the last ")": every comment is there, the rest is not
+        # searched; a CAM program's header comment, then 1M plain lines)
+        first, end = text.find(b"("), text.rfind(b")") + 1
+        if 0 <= first < end:
+            text = text[:first] + _COMMENT.sub(b"", text[first:end]) + text[end:]
         if b"(" in text or b")" in text:
             t = np.frombuffer(text, dtype=np.uint8)
             lf = np.flatnonzero(t == LF)
@@ -162,9 +167,22 @@ def tokenize(src: Source) -> Words:
         bad.update(_lines_of(lfpos, orphan).tolist())
 
     del brk_mask, after, orphan
-    numbers = text.translate(_NUMBERS)
     values = None
-    for attempt in range(2):
+    # The numbers straight from the text (adapters.gcode.numbers); where one is not well
+    # formed, C's parse of them all and the search for the lines to blame below.
+    want = ~empty
+    if bad:
+        want &= ~np.isin(wline, np.array(sorted(bad), dtype=np.int64))
+    if want.all():
+        values = read_numbers(text, lpos, span_end)
+    elif want.any():
+        vals = read_numbers(text, lpos[want], span_end[want])
+        if vals is not None:
+            values = np.full(lpos.size, np.nan)
+            values[want] = vals
+            del vals
+    numbers = text.translate(_NUMBERS) if values is None else b""
+    for attempt in range(2 if values is None else 0):
         bad_arr = np.array(sorted(bad), dtype=np.int64)
         if bad_arr.size:
             sep = np.frombuffer(numbers, dtype=np.uint8).copy()

@@ -697,6 +697,7 @@ class _Printable(io.TextIOBase):
 
 
 def main(argv: list[str] | None = None) -> int:
+    # (numpy's BLAS threads: set in core/cli/__init__.py, before anything loads numpy)
     out, err = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = _Printable(out), _Printable(err)
     try:

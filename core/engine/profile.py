@@ -658,20 +658,23 @@ def _pass_terms(a: NDArray, inner: NDArray) -> NDArray:
     return tmp
 
 
-def _passes_of(b2: NDArray, up: NDArray, dn: NDArray) -> NDArray:
+def _passes_of(
+    b2: NDArray, up: NDArray, dn: NDArray, work: tuple[NDArray, NDArray] | None = None
+) -> NDArray:
     """:func:`_passes` from the squared caps ``b2`` and the :func:`_pass_terms` of both
     directions (the rounds of :func:`build_profile` keep the terms and renew only those of
     the moves whose acceleration changed). (Written with ``out=``: the same operations in
-    the same order, without a temporary per step.)"""
+    the same order, without a temporary per step; ``work``: two (n + 1,) arrays to write
+    the sums and the backward pass into, which the rounds keep from pass to pass.)"""
     n1 = b2.size
-    w = np.empty(n1)
+    w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
     w[0] = 0.0
     np.cumsum(up, out=w[1:])
     fwd = np.subtract(b2, w)
     np.minimum.accumulate(fwd, out=fwd)
     fwd += w
     np.cumsum(dn, out=w[1:])
-    bwd = np.add(b2, w)
+    np.add(b2, w, out=bwd)
     rev = bwd[::-1]
     np.minimum.accumulate(rev, out=rev)
     bwd -= w
@@ -907,10 +910,13 @@ class _Rounds:
         # last round's ramps (moves, speed changes, effective accelerations) per direction
         self.last_up: tuple[NDArray, NDArray, NDArray] | None = None
         self.last_dn: tuple[NDArray, NDArray, NDArray] | None = None
+        self.b2 = caps * caps
+        self.work = (np.empty(caps.size), np.empty(caps.size))
 
     def passes(self) -> NDArray:
-        """:func:`_passes` at the current accelerations."""
-        return _passes_of(self.caps * self.caps, self.term_up, self.term_dn)
+        """:func:`_passes` at the current accelerations (the squared caps and the passes'
+        work arrays made once for all the rounds)."""
+        return _passes_of(self.b2, self.term_up, self.term_dn, self.work)
 
     def step(self, v: NDArray) -> float:
         """One round from the boundary speeds ``v``: the accelerations of the next (in
