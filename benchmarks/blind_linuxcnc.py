@@ -56,7 +56,7 @@ INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
 #: ``score5`` (seeds 50000-50509): recorded on 2026-11-26 (from 19:20 UTC) after the naive-CAM
 #: detector and the piecewise ramps along LinuxCNC's free blend arcs were written (developed
 #: on tune, score2 and seeds 70000-70009 of linuxcnc_naivecam.py), before any of its traces
-#: was looked at; diagnosed once.
+#: was looked at; diagnosed once, at commit 312e82e (2026-11-26, 19:47-20:14 UTC).
 SEEDS = {
     "tune": 100,
     "score": 9000,
