@@ -123,36 +123,16 @@ def test_a_line_turning_towards_an_arcs_centre_corners_on_its_secant(nc):
     0.218860 mm, v = sqrt(2000 R) = 20.922 mm/s. (LHchips4's G19 quarter arcs, recorded:
     26.9 mm/s where ncperf had 83.)"""
     b = math.radians(4.0)
-    end = (5.0 - 0.4 * math.sin(b), -0.4 * math.cos(b), 0.0)
-    tp = g64(
-        [
-            {
-                "start": (0.0, 5.0, 0.0),
-                "end": (5.0, 0.0, 0.0),
-                "center": (0.0, 0.0, 0.0),
-                "ccw": False,
-            },
-            {"end": end},
-        ],
-        feed=50.0,
-    )
-    ind = tangential(nc, tp, lcnc())
+    quarter = {"start": (0.0, 5.0, 0.0), "end": (5.0, 0.0, 0.0), "center": (0.0, 0.0, 0.0)}
+
+    def arc_then_line(x_off: float):
+        end = (5.0 + x_off * 0.4 * math.sin(b), -0.4 * math.cos(b), 0.0)
+        return g64([{**quarter, "ccw": False}, {"end": end}], feed=50.0)
+
+    ind = tangential(nc, arc_then_line(-1.0), lcnc())
     assert ind.feed[0] == pytest.approx(math.sqrt(2000.0 * 0.218860), rel=1e-4)
     # turned away from the centre (concave) the tangents' corner stands: F
-    end_out = (5.0 + 0.4 * math.sin(b), -0.4 * math.cos(b), 0.0)
-    tp_out = g64(
-        [
-            {
-                "start": (0.0, 5.0, 0.0),
-                "end": (5.0, 0.0, 0.0),
-                "center": (0.0, 0.0, 0.0),
-                "ccw": False,
-            },
-            {"end": end_out},
-        ],
-        feed=50.0,
-    )
-    assert tangential(nc, tp_out, lcnc()).feed[0] > 45.0
+    assert tangential(nc, arc_then_line(+1.0), lcnc()).feed[0] > 45.0
 
 
 def test_a_binding_arc_is_run_at_its_speed(nc):
