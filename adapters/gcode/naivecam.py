@@ -98,6 +98,8 @@ def scan(words: Words, block_delete: bool = False) -> LineInfo | None:
 def join(tp: ToolPath, info: LineInfo, notes: Notes | None = None) -> ToolPath:
     """``tp`` as LinuxCNC's interpreter sends it to the planner: flat XY arcs as two lines,
     runs of joinable lines as one segment each (see the module docstring)."""
+    if tp.tool_axis is not None:
+        return tp
     n_lines = info.tol.size
     own = np.ones(tp.n, dtype=bool) if tp.origin is None else tp.origin < 0
     idx = np.clip(tp.line - 1, 0, n_lines - 1)
@@ -107,8 +109,6 @@ def join(tp: ToolPath, info: LineInfo, notes: Notes | None = None) -> ToolPath:
     radius = np.linalg.norm(tp.start - tp.center, axis=1)
     with np.errstate(invalid="ignore"):
         flat = arc & xy & (tol > 0) & (chord_deviation(radius, included_angle(tp.sweep)) < tol)
-    if tp.tool_axis is not None:
-        return tp
     tp2, src = split_flat_arcs(tp, flat)
     tol2 = tol[src]
     line = tp2.line

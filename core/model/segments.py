@@ -31,7 +31,7 @@ import math
 import numpy as np
 from numpy.typing import NDArray
 
-from core.model.toolpath import MoveKind, PathMode, RotaryMoves, ToolPath
+from core.model.toolpath import MoveKind, PathMode, RotaryMoves, ToolPath, rebuilt
 
 #: At most this many points are collected into one segment (emccanon.cc ``linkable``:
 #: ``chained_points.size() > 100`` refuses a 102nd).
@@ -128,20 +128,7 @@ def _take(tp: ToolPath, rows: NDArray[np.intp], **over: NDArray) -> ToolPath:
     # operation i starts at the first row whose move is at or after its first move
     offs = np.searchsorted(rows, tp.op_offsets[:-1], side="left")
     offs = np.concatenate([offs, [rows.size]]).astype(np.int64)
-    return ToolPath(
-        **cols,
-        op_offsets=offs,
-        op_names=tp.op_names,
-        source=tp.source,
-        notices=tp.notices,
-        tool_axis=None if tp.tool_axis is None else tp.tool_axis[rows],
-        units=tp.units,
-        origin=None if tp.origin is None else tp.origin[rows],
-        origins=tp.origins,
-        origin_files=tp.origin_files,
-        rotary=None if tp.rotary is None else tp.rotary[rows],
-        rotary_only=_after_rows(tp.rotary_only, rows),
-    )
+    return rebuilt(tp, rows, cols, offs, tp.op_names, _after_rows(tp.rotary_only, rows))
 
 
 def _after_rows(rm: RotaryMoves | None, rows: NDArray[np.intp]) -> RotaryMoves | None:

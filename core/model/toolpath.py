@@ -758,22 +758,33 @@ def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
         keep_op = np.flatnonzero(sizes > 0)
         names = tuple(names[i] for i in keep_op)
         offs = np.concatenate([[0], offs[1:][keep_op]])
-    return (
-        ToolPath(
-            **cols,
-            op_offsets=offs,
-            op_names=names,
-            source=tp.source,
-            notices=tp.notices,
-            tool_axis=None if tp.tool_axis is None else tp.tool_axis[keep],
-            units=tp.units,
-            origin=None if tp.origin is None else tp.origin[keep],
-            origins=tp.origins,
-            origin_files=tp.origin_files,
-            rotary=None if tp.rotary is None else tp.rotary[keep],
-            rotary_only=_reindexed(tp.rotary_only, keep),
-        ),
-        removed,
+    return rebuilt(tp, keep, cols, offs, names, _reindexed(tp.rotary_only, keep)), removed
+
+
+def rebuilt(
+    tp: ToolPath,
+    rows: NDArray,
+    cols: dict[str, Any],
+    op_offsets: NDArray[np.int64],
+    op_names: tuple[str, ...],
+    rotary_only: RotaryMoves | None,
+) -> ToolPath:
+    """A tool path of some of ``tp``'s moves (``rows``: a mask or indices) with the move
+    columns ``cols`` made for them and their operations; the optional per-move columns
+    (tool axis, origin, rotary axes) are ``tp``'s at ``rows``, the rest ``tp``'s own."""
+    return ToolPath(
+        **cols,
+        op_offsets=op_offsets,
+        op_names=op_names,
+        source=tp.source,
+        notices=tp.notices,
+        tool_axis=None if tp.tool_axis is None else tp.tool_axis[rows],
+        units=tp.units,
+        origin=None if tp.origin is None else tp.origin[rows],
+        origins=tp.origins,
+        origin_files=tp.origin_files,
+        rotary=None if tp.rotary is None else tp.rotary[rows],
+        rotary_only=rotary_only,
     )
 
 
