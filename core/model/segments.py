@@ -25,13 +25,12 @@ takes, per move, the tolerance in force and whether the move may join the move b
 
 from __future__ import annotations
 
-import dataclasses
 import math
 
 import numpy as np
 from numpy.typing import NDArray
 
-from core.model.toolpath import MoveKind, PathMode, RotaryMoves, ToolPath, rebuilt
+from core.model.toolpath import MoveKind, PathMode, ToolPath, rebuilt
 
 #: At most this many points are collected into one segment (emccanon.cc ``linkable``:
 #: ``chained_points.size() > 100`` refuses a 102nd).
@@ -78,30 +77,33 @@ def split_flat_arcs(tp: ToolPath, flat: NDArray[np.bool_]) -> tuple[ToolPath, ND
     h = ((s + e) / 2.0 * nrm).sum(axis=1) - (mid * nrm).sum(axis=1)
     mid = mid + h[:, None] * nrm
 
-    def rows(a: NDArray) -> NDArray:
-        return a[src]
-
-    start, end = rows(tp.start), rows(tp.end)
-    start = np.array(start)
-    end = np.array(end)
+    start, end = tp.start[src], tp.end[src]  # (gathered: copies of their own)
     end[first[idx]] = mid
     start[first[idx] + 1] = mid
     piece = np.zeros(src.size, dtype=bool)
     piece[first[idx]] = piece[first[idx] + 1] = True
-    kind = rows(tp.kind).copy()
+    kind = tp.kind[src]
     kind[piece] = MoveKind.LINE
-    center, normal = np.array(rows(tp.center)), np.array(rows(tp.normal))
+    center, normal, sweep = tp.center[src], tp.normal[src], tp.sweep[src]
     center[piece] = np.nan
     normal[piece] = np.nan
-    sweep = np.array(rows(tp.sweep))
     sweep[piece] = np.nan
-    dwell = np.array(rows(tp.dwell))
-    mode = np.array(rows(tp.path_mode))
+    dwell, mode = tp.dwell[src], tp.path_mode[src]
     # a dwell or a stop after the arc comes after its second half
     dwell[first[idx]] = 0.0
     mode[first[idx]] = PathMode.CONTINUOUS
-    out = _take(tp, src, start=start, end=end, kind=kind, center=center, normal=normal)
-    out = dataclasses.replace(out, sweep=sweep, dwell=dwell, path_mode=mode)
+    out = _take(
+        tp,
+        src,
+        start=start,
+        end=end,
+        kind=kind,
+        center=center,
+        normal=normal,
+        sweep=sweep,
+        dwell=dwell,
+        path_mode=mode,
+    )
     return out, src
 
 
@@ -128,27 +130,16 @@ def _take(tp: ToolPath, rows: NDArray[np.intp], **over: NDArray) -> ToolPath:
     # operation i starts at the first row whose move is at or after its first move
     offs = np.searchsorted(rows, tp.op_offsets[:-1], side="left")
     offs = np.concatenate([offs, [rows.size]]).astype(np.int64)
-    return rebuilt(tp, rows, cols, offs, tp.op_names, _after_rows(tp.rotary_only, rows))
+    return rebuilt(tp, rows, cols, offs, tp.op_names)
 
 
-def _after_rows(rm: RotaryMoves | None, rows: NDArray[np.intp]) -> RotaryMoves | None:
-    """Rotary-only moves re-pointed to the last row of the move they followed."""
-    if rm is None:
-        return None
-    last = np.searchsorted(rows, rm.after, side="right") - 1
-    after = np.where(rm.after >= 0, last, -1)
-    return RotaryMoves(after=after, travel=rm.travel, feed=rm.feed, line=rm.line)
-
-
-def chain_ends(
-    points: NDArray[np.float64], tol: float, first: int = 0, stop: int | None = None
-) -> list[int]:
+def chain_ends(points: NDArray[np.float64], tol: float) -> list[int]:
     """Where LinuxCNC's collector sends its segments along ``points`` (point 0 the start,
     point i the end of the i-th block), all blocks joinable under tolerance ``tol``: the
     indices of the points that end a segment, in order (the last is the last point)."""
-    m = points.shape[0] - 1 if stop is None else stop
+    m = points.shape[0] - 1
     ends: list[int] = []
-    s = first
+    s = 0
     while s < m:
         e = s + 1  # the first point is collected without a test
         hi = min(m, s + MAX_POINTS)

@@ -758,20 +758,20 @@ def drop_zero_length(tp: ToolPath) -> tuple[ToolPath, NDArray[np.int64]]:
         keep_op = np.flatnonzero(sizes > 0)
         names = tuple(names[i] for i in keep_op)
         offs = np.concatenate([[0], offs[1:][keep_op]])
-    return rebuilt(tp, keep, cols, offs, names, _reindexed(tp.rotary_only, keep)), removed
+    return rebuilt(tp, np.flatnonzero(keep), cols, offs, names), removed
 
 
 def rebuilt(
     tp: ToolPath,
-    rows: NDArray,
+    rows: NDArray[np.intp],
     cols: dict[str, Any],
     op_offsets: NDArray[np.int64],
     op_names: tuple[str, ...],
-    rotary_only: RotaryMoves | None,
 ) -> ToolPath:
-    """A tool path of some of ``tp``'s moves (``rows``: a mask or indices) with the move
-    columns ``cols`` made for them and their operations; the optional per-move columns
-    (tool axis, origin, rotary axes) are ``tp``'s at ``rows``, the rest ``tp``'s own."""
+    """A tool path of ``tp``'s moves ``rows`` (ascending indices, a move repeated where it
+    became several) with the move columns ``cols`` made for them and their operations; the
+    optional per-move columns (tool axis, origin, rotary axes) are ``tp``'s at ``rows``, a
+    rotary-only move follows the last row of the move it followed, the rest is ``tp``'s."""
     return ToolPath(
         **cols,
         op_offsets=op_offsets,
@@ -784,15 +784,15 @@ def rebuilt(
         origins=tp.origins,
         origin_files=tp.origin_files,
         rotary=None if tp.rotary is None else tp.rotary[rows],
-        rotary_only=rotary_only,
+        rotary_only=_reindexed(tp.rotary_only, rows),
     )
 
 
-def _reindexed(rm: RotaryMoves | None, keep: NDArray[np.bool_]) -> RotaryMoves | None:
-    """Rotary-only moves after some moves were removed: each follows the last kept move at
-    or before the one it followed."""
+def _reindexed(rm: RotaryMoves | None, rows: NDArray[np.intp]) -> RotaryMoves | None:
+    """Rotary-only moves re-pointed to the rows of a path of some moves (:func:`rebuilt`):
+    each follows the last row of the last move kept at or before the one it followed."""
     if rm is None:
         return None
-    new_index = np.cumsum(keep) - 1  # index among the kept moves of the last kept at or before
-    after = np.where(rm.after >= 0, new_index[np.maximum(rm.after, 0)], -1)
+    last = np.searchsorted(rows, rm.after, side="right") - 1
+    after = np.where(rm.after >= 0, last, -1)
     return RotaryMoves(after=after, travel=rm.travel, feed=rm.feed, line=rm.line)
