@@ -243,11 +243,10 @@ def plane_acceleration(
 def linuxcnc_blends(
     tp: ToolPath,
     j: NDArray[np.int64],
-    beta: NDArray,
     tit: NDArray,
     machine: Machine,
     caps: tuple[NDArray, NDArray],
-    geometry: tuple[NDArray, NDArray, NDArray] | None = None,
+    geometry: tuple[NDArray, NDArray, NDArray],
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's corners (module docstring): the radius that limits the corner speed,
     the arc's radius as inserted (R_plan; 0 where the junction is run as tangent), whether
@@ -255,18 +254,14 @@ def linuxcnc_blends(
     the axis that sets it, and the kink: the largest axis share of the acceleration turning
     at speed in one servo period needs (tangent below LCNC_KINK_RATIO). ``caps``: the two
     segments' top speeds (:func:`segment_caps`); ``geometry``: the direction change the arc
-    is laid for and its reach before and after (:func:`arc_blend_geometry`; None: ``beta``
-    and half of each segment)."""
+    is laid for and its reach before and after (:func:`arc_blend_geometry`)."""
     t1, t2 = _rows(tp.tangent_end, j), _rows(tp.tangent_start, j + 1)
     acc = machine.max_acceleration
     a_plane, axis = plane_acceleration(t1, t2, acc)
     a_n = a_plane * machine.normal_acceleration_factor
     t_int = machine.interpolation_time
     servo = t_int / LCNC_MIN_SEGMENT_CYCLES
-    if geometry is None:
-        phi, reach_p, reach_n = beta, tp.length[j] / 2.0, tp.length[j + 1] / 2.0
-    else:
-        phi, reach_p, reach_n = geometry
+    phi, reach_p, reach_n = geometry
     cap_p, cap_n = caps
     half = phi / 2.0
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -296,8 +291,8 @@ def linuxcnc_choice(
     kink: NDArray,
     caps: tuple[NDArray, NDArray],
     machine: Machine,
-    phi: NDArray | None = None,
-    refused: NDArray | None = None,
+    phi: NDArray,
+    refused: NDArray,
 ) -> tuple[NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's choice at the junctions that are not tangent kinks (``tpHandleBlendArc``,
     ``tpChooseBestBlend``): the blend arc, a parabolic blend or a tangent kink, whichever
@@ -313,7 +308,8 @@ def linuxcnc_choice(
     at that speed on average, so it costs the time of that speed), and the share of the
     tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio). ``caps``: the two
     segments' top speeds (:func:`segment_caps`); ``phi``: the direction change the blend
-    arc is laid for (None: ``beta``); ``refused``: junctions whose arc LinuxCNC refuses.
+    arc is laid for; ``refused``: junctions whose arc LinuxCNC refuses
+    (:func:`arc_blend_geometry`).
     """
     k0, k1 = j, j + 1
     a_path = _path_acceleration(tp, np.concatenate([k0, k1]), machine)
@@ -342,10 +338,8 @@ def linuxcnc_choice(
         )
         perf_parabolic = cos_half * (plan[0] + plan[1]) / 2.0 / 2.0
         perf_tangent = np.fmin(f0, f1) * LCNC_KINK_RATIO / kink
-        arc_ok = _arc_blend_possible(tp, j)
-        if refused is not None:
-            arc_ok &= ~refused
-        arc_len = r_plan * (beta if phi is None else phi)
+        arc_ok = _arc_blend_possible(tp, j) & ~refused
+        arc_len = r_plan * phi
         perf_arc = np.where(arc_ok, np.fmin(arc_feed, arc_len / t_int), 0.0)
         run = _parabolic_speed(a0 * 0.5, a1 * 0.5, l0, l1, l0, l1, f0, f1, tol, sin_half)
     perf = np.stack([perf_arc, np.nan_to_num(perf_parabolic), np.nan_to_num(perf_tangent)])
@@ -495,7 +489,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
         caps = segment_caps(tp, j, machine)
         phi, reach_p, reach_n, refused = arc_blend_geometry(tp, j, beta)
         radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(
-            tp, j, beta, tit, machine, caps, (phi, reach_p, reach_n)
+            tp, j, tit, machine, caps, (phi, reach_p, reach_n)
         )
     else:
         shorter = np.minimum(tp.length[j], tp.length[j + 1])

@@ -1250,15 +1250,14 @@ def _exact_blend_times(
     v0: NDArray,
     peak: NDArray,
     v1: NDArray,
-) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+) -> tuple[NDArray, NDArray, NDArray]:
     """For the moves ``sel`` with free arcs: the holds and the acceleration that run them
     in the time the planner takes -- speed changing at a_blend along the arcs and at the
     move's acceleration between them, piece by piece -- with the same entry, peak and exit
     speeds. The holds of a free arc are scaled by a factor in [0, 1] and the acceleration
     keeps the reach: 1 is the shortened holds (flat, then a steep ramp), 0 one ramp at the
     mean acceleration over the whole stretch; the factor is found by bisection (the time
-    falls as it grows). Returns the new h_start, h_end (of ``sel``), acceleration, and the
-    planner's times."""
+    falls as it grows). Returns the new h_start, h_end and acceleration of ``sel``."""
     fs, fe, ab = fa.start[sel], fa.end[sel], fa.a_blend[sel]
     a = acc[sel]
     L = length[sel]
@@ -1309,7 +1308,7 @@ def _exact_blend_times(
     lam = np.where(t_exact >= np.maximum(t_lo, t_hi), np.where(t_lo >= t_hi, 0.0, 1.0), lam)
     lam = np.where(t_exact <= np.minimum(t_lo, t_hi), np.where(t_lo <= t_hi, 0.0, 1.0), lam)
     s0, s1, a_l, _ = shape(lam)
-    return s0, s1, a_l, t_exact
+    return s0, s1, a_l
 
 
 #: Bisection steps for the shape of a move along free blend arcs (2^-30 of the factor).
@@ -1422,7 +1421,7 @@ def build_profile(
         if free_arcs is not None and sel.size:
             # The planner's time along its free arcs, piece by piece, with the same speeds
             # at the blocks' ends and peaks: the holds and accelerations that give it.
-            s0, s1, a_l, _ = _exact_blend_times(
+            s0, s1, a_l = _exact_blend_times(
                 free_arcs, sel, length, acc, h_start, h_end, r_start, r_end, *speeds[:3]
             )
             h_start, h_end = h_start.copy(), h_end.copy()
