@@ -7,6 +7,7 @@ to find where a point lies on the path.
 
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -150,18 +151,9 @@ class PathSamples:
         n = j.size
         if half < NEAR_FIRST:
             return np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n, dtype=bool)
-        best_key = best_d2 = np.empty(0)
-        best_i = np.empty(0, dtype=np.int64)
-        for off in range(-NEAR_FIRST, NEAR_FIRST + 1):
-            cand = np.clip(j + off, 0, last)
-            key, d2 = self._key(cand, qx, qy, qz, guess)
-            if off == -NEAR_FIRST:
-                best_key, best_d2, best_i = key, d2, cand
-                continue
-            better = key < best_key  # (ties: the earlier offset, the earlier point)
-            best_key[better] = key[better]
-            best_d2[better] = d2[better]
-            best_i[better] = cand[better]
+        best_key, best_d2, best_i, _ = self._best_of(
+            range(-NEAR_FIRST, NEAR_FIRST + 1), j, qx, qy, qz, guess
+        )
         # the points within CLEAR_FROM - 1 of the best (on the path) were looked at
         seen_lo = np.maximum(j - NEAR_FIRST, 0)
         seen_hi = np.minimum(j + NEAR_FIRST, last)
@@ -209,23 +201,8 @@ class PathSamples:
         if coarse[-1] != half:
             coarse.append(half)
         reach = self._reach
-        best_key = best_d2 = np.empty(0)
-        best_i = np.empty(0, dtype=np.int64)
-        best_o = np.full(j.size, -half)
-        seen = []
-        for off in coarse:
-            cand = np.clip(j + off, 0, last)
-            key, d2 = self._key(cand, qx, qy, qz, guess)
-            seen.append((cand, np.sqrt(d2)))
-            if off == -half:
-                # (copies: ``seen`` keeps this offset's candidates)
-                best_key, best_d2, best_i = key, d2, cand.copy()
-                continue
-            better = key < best_key
-            best_key[better] = key[better]
-            best_d2[better] = d2[better]
-            best_i[better] = cand[better]
-            best_o[better] = off
+        seen: list[tuple[NDArray, NDArray]] = []
+        best_key, best_d2, best_i, best_o = self._best_of(coarse, j, qx, qy, qz, guess, seen)
         for (o1, o2), (c1, d1), (_, d2) in zip(
             zip(coarse[:-1], coarse[1:], strict=True), seen[:-1], seen[1:], strict=True
         ):
@@ -247,6 +224,39 @@ class PathSamples:
                 best_i[r] = cand[better]
                 best_o[r] = off
         return best_i, best_d2
+
+    def _best_of(
+        self,
+        offsets: Sequence[int],
+        j: NDArray[np.int64],
+        qx: NDArray[np.float64],
+        qy: NDArray[np.float64],
+        qz: NDArray[np.float64],
+        guess: NDArray[np.float64],
+        seen: list[tuple[NDArray, NDArray]] | None = None,
+    ) -> tuple[NDArray, NDArray, NDArray[np.int64], NDArray]:
+        """The nearest (by :meth:`_key`, ties to the earlier offset) of the path points
+        ``j + offsets`` (clipped to the path): its key, squared distance, index and offset;
+        ``seen`` gets every offset's candidates and distances."""
+        last = self.s.size - 1
+        best_key = best_d2 = np.empty(0)
+        best_i = np.empty(0, dtype=np.int64)
+        best_o = np.full(j.size, offsets[0])
+        for off in offsets:
+            cand = np.clip(j + off, 0, last)
+            key, d2 = self._key(cand, qx, qy, qz, guess)
+            if seen is not None:
+                seen.append((cand, np.sqrt(d2)))
+            if off == offsets[0]:
+                # (a copy: ``seen`` keeps this offset's candidates)
+                best_key, best_d2, best_i = key, d2, cand.copy()
+                continue
+            better = key < best_key
+            best_key[better] = key[better]
+            best_d2[better] = d2[better]
+            best_i[better] = cand[better]
+            best_o[better] = off
+        return best_key, best_d2, best_i, best_o
 
     def _key(
         self,
