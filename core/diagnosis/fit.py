@@ -86,14 +86,16 @@ def fit(
             cache[key] = (objective.gap(preds, data, "calibration"), setup)
         return cache[key][0]
 
+    def result(best: dict[str, float]) -> tuple[dict[str, float], list[Prediction]]:
+        """The fitted values and their predictions, made again from the kept setup."""
+        return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
+
     if not eff.params:
         score({})
-        return {}, predict_all(indicators_of, tps, cache[()][1])
+        return result({})
     params = eff.params
     if eff.stages:
-        best = _staged(eff, defaults, score)
-        best = _refined(eff, best, defaults, score)
-        return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
+        return result(_refined(eff, _staged(eff, defaults, score), defaults, score))
     if len(params) == 1:
         p = params[0]
         candidates = [{p.name: float(x)} for x in grid(p, GRID_1D)]
@@ -115,8 +117,7 @@ def fit(
         for p in params:
             line = [best | {p.name: float(x)} for x in grid(p, GRID_1D)]
             best = min([best, *line], key=score)
-    best = _refined(eff, best, defaults, score)
-    return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
+    return result(_refined(eff, best, defaults, score))
 
 
 def _remembered(indicators_of: IndicatorSource) -> IndicatorSource:
