@@ -129,7 +129,7 @@ _PER_LINE = (
 )
 
 
-def _ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> NDArray:
+def ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> NDArray:
     """Forward-fill ``values`` from the positions where ``is_set``; ``initial`` before the first."""
     if not is_set.any():
         return np.full(values.shape, initial, dtype=np.result_type(values, type(initial)))
@@ -288,7 +288,7 @@ class Interpreter:
         fvals, fpres = self.vals["F"], self.pres["F"]
         if (fpres & (fvals <= 0)).any():
             raise self.error(self.al[np.argmax(fpres & (fvals <= 0))], "feed F must be positive")
-        feed_line = _ffill(fvals * self.feed_scale, fpres, init.feed)
+        feed_line = ffill(fvals * self.feed_scale, fpres, init.feed)
         pm = self.g[G.PATH_MODE]
         final = State(
             motion=int(self.motion[-1]),
@@ -433,7 +433,7 @@ class Interpreter:
 
         def fill(group: W.Group, initial: int) -> NDArray[np.int64]:
             row = gg[group]
-            return _ffill(row, row >= 0, initial)
+            return ffill(row, row >= 0, initial)
 
         init = self.initial
         self.motion = fill(G.MOTION, -1 if init is None else init.motion)
@@ -680,9 +680,9 @@ class Interpreter:
         if bad_t.any():
             k = int(np.flatnonzero(bad_t)[0])
             raise self.error(self.al[k], f"tool number must be a whole number 0 to {MAX_TOOL}")
-        t_sel = _ffill(tvals, tpres, -1)
+        t_sel = ffill(tvals, tpres, -1)
         if self.m_tool.any():
-            tool_line = _ffill(t_sel, self.m_tool, -1)
+            tool_line = ffill(t_sel, self.m_tool, -1)
             change = np.flatnonzero(self.m_tool)
         else:
             tool_line = t_sel
@@ -732,7 +732,7 @@ class Interpreter:
         p = self.vals["P"]
         tol = np.where((pm == 640) & self.pres["P"] & (p > 0), p * self.scale, np.nan)
         tol[pm == W.EXACT_PATH] = 0.0  # G61, exact path: no deviation at all
-        return _ffill(tol, pm >= 0, initial)
+        return ffill(tol, pm >= 0, initial)
 
     def _columns(self, mi: NDArray[np.int64]) -> dict:
         """The columns of the moves on lines ``mi`` (all but tools and operations)."""
@@ -785,7 +785,7 @@ class Interpreter:
         if (fpres & (fvals <= 0)).any():
             raise self.error(al[np.argmax(fpres & (fvals <= 0))], "feed F must be positive")
         initial_feed = math.nan if self.initial is None else self.initial.feed
-        feed_line = _ffill(fvals * self.feed_scale, fpres, initial_feed)
+        feed_line = ffill(fvals * self.feed_scale, fpres, initial_feed)
         feed = feed_line[mi]
         nofeed = feedmove & np.isnan(feed)
         if nofeed.any():

@@ -19,6 +19,7 @@ import dataclasses
 import numpy as np
 from numpy.typing import NDArray
 
+from adapters.gcode.interp import ffill
 from adapters.gcode.lexer import Words
 from core.model.errors import Notes
 from core.model.segments import chord_deviation, included_angle, merge_lines, split_flat_arcs
@@ -76,9 +77,7 @@ def scan(words: Words, block_delete: bool = False) -> LineInfo | None:
     unit_set = np.full(n, np.nan)
     unit_set[line[code == 200]] = MM_PER_INCH
     unit_set[line[code == 210]] = 1.0
-    has_unit = ~np.isnan(unit_set)
-    last = np.maximum.accumulate(np.where(has_unit, np.arange(n), -1))
-    scale = np.where(last >= 0, unit_set[np.maximum(last, 0)], 1.0)
+    scale = ffill(unit_set, ~np.isnan(unit_set), 1.0)
     # the tolerance set on each path-mode line: G64 Q, else G64 P, else 0; G61/G61.1: 0
     mode_lines = np.unique(line[np.isin(code, [610, 611, 640])])
     g64 = np.zeros(n, dtype=bool)
@@ -87,8 +86,7 @@ def scan(words: Words, block_delete: bool = False) -> LineInfo | None:
     set_tol = np.where(g64, set_tol, 0.0)
     is_mode = np.zeros(n, dtype=bool)
     is_mode[mode_lines] = True
-    last = np.maximum.accumulate(np.where(is_mode, np.arange(n), -1))
-    tol = np.where(last >= 0, set_tol[np.maximum(last, 0)], 0.0)
+    tol = ffill(set_tol, is_mode, 0.0)
     flush = np.zeros(n, dtype=bool)
     flush[line[np.isin(letter, _LETTERS_THAT_FLUSH)]] = True
     flush[line[np.isin(code, list(FLUSHING_G))]] = True
