@@ -1,6 +1,6 @@
 """The blind diagnosis benchmark: programs and settings the diagnosis was not tuned on.
 
-Not a test: ``python benchmarks/blind_linuxcnc.py --seeds tune|score|score2|score3|score4|score5
+Not a test: ``python benchmarks/blind_linuxcnc.py --seeds tune|score|score2|score3|score4|score5|score6
 [--cache DIR] [--jobs 2] [--only N]`` (needs LinuxCNC and ../shared/tools/linuxcnc; the traces are
 recorded in real time, about 25 min per seed set, and cached).
 
@@ -9,7 +9,7 @@ slots, gears of chords, free-form chord paths, spiral pockets, a dome raster, en
 thread milling, a 2.5D part, long kinked lines), each drawn from a seed. Seed sets are kept
 apart: ``tune`` (seeds 100-999), used while developing the effects and the decision rule,
 and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999), ``score3`` (30000-30999),
-``score4`` (40000-40999) and ``score5`` (50000-50999),
+``score4`` (40000-40999), ``score5`` (50000-50999) and ``score6`` (60000-60999),
 each run for the figures in the README (the README says which were looked at afterwards).
 Every case is one program run through LinuxCNC 2.9's real planner on the harness's default
 mill with ONE setting changed (per-axis acceleration or speed, servo period, the path
@@ -57,6 +57,8 @@ INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
 #: detector and the piecewise ramps along LinuxCNC's free blend arcs were written (developed
 #: on tune, score2 and seeds 70000-70009 of linuxcnc_naivecam.py), before any of its traces
 #: was looked at; diagnosed once, at commit 312e82e (2026-11-26, 19:47-20:14 UTC).
+#: ``score6`` (seeds 60000-60509): recorded on 2026-11-26 (from 21:30 UTC) at commit 56c8cd2,
+#: before the session's diagnosis changes (developed on tune, score2-score5), no trace looked at.
 SEEDS = {
     "tune": 100,
     "score": 9000,
@@ -64,6 +66,7 @@ SEEDS = {
     "score3": 30000,
     "score4": 40000,
     "score5": 50000,
+    "score6": 60000,
 }
 #: Programs per changed setting.
 PER_VARIANT = 4
