@@ -468,11 +468,24 @@ def test_the_reason_for_naming_nothing_quotes_the_thresholds_used():
     _, best, reason = decide([r], floor=0.96)
     assert best is None
     assert reason == ("none: the best fit, servo_lag, removes 0.7 mm/min (< the floor 1.0 mm/min)")
-    # above the floor, but a lucky stretch (p 0.2) and under 3 x the floor: not significant
-    r = EffectResult("servo_lag", {"tau": 0.01}, 10.0, 8.0, 8.0, moved=1, p=0.2)
+    # above the floor, but a lucky stretch (p 0.2) and under 2 x the floor: not significant
+    r = EffectResult("servo_lag", {"tau": 0.01}, 10.0, 8.5, 8.5, moved=1, p=0.2)
     _, best, reason = decide([r], floor=1.0)
     assert best is None
     assert reason.endswith("is not significant over the held-out pieces (p = 0.2 > 0.01)")
+
+
+def test_an_effect_at_a_few_corners_is_named_when_it_removes_twice_the_floor():
+    """Score5's kinked_lines_50111 (G64 P0.05 instead of 0.01): the tolerance shows at 5
+    corners, so the sign-flip test cannot go below 1/2^5 = 0.031 even where every piece
+    improves; removing 60.4 -> 9.6 mm/min (50.8, 2.54 x the floor of 20 mm/min, 84 %) is
+    named. 60.4 -> 21.0 (39.4 < 2 x 20) at the same p is not."""
+    from core.diagnosis.diagnose import EffectResult, decide
+
+    r = EffectResult("corner_tolerance", {"tolerance": 0.05}, 60.4, 9.6, 9.6, moved=1, p=1 / 32)
+    assert decide([r], floor=20.0)[1] == "corner_tolerance"
+    r = EffectResult("corner_tolerance", {"tolerance": 0.05}, 60.4, 21.0, 21.0, moved=1, p=1 / 32)
+    assert decide([r], floor=20.0)[1] is None
 
 
 def test_an_effect_switched_on_at_its_defaults_is_no_simpler_than_one_fitted():
