@@ -47,6 +47,7 @@ from core.diagnosis.resample import (
     feed_level,
     gap,
     held_out_chunks,
+    rapid_gap,
     resample,
     split,
     trace_noise,
@@ -91,6 +92,8 @@ class EffectResult:
     p: float = 1.0
     #: squared gap per held-out piece ((mm/min)^2 s), for comparing effects pairwise
     chunk_sq: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
+    #: RMS gap on the rapids (mm/min; NaN: the traces cover none), which no fit sees
+    rapid_gap: float = math.nan
 
     @property
     def removed(self) -> float:
@@ -226,7 +229,9 @@ def diagnose_cases(
         sq_after, _ = held_out_chunks(fitted[r.name][1], data)
         moved = _moved(effects[r.name], r.params, effects[r.name].start(base.machine))
         p = sign_flip_p(sq_before, sq_after)
-        results[k] = dataclasses.replace(r, moved=moved, p=p, chunk_sq=sq_after)
+        results[k] = dataclasses.replace(
+            r, moved=moved, p=p, chunk_sq=sq_after, rapid_gap=rapid_gap(fitted[r.name][1], data)
+        )
     floor, floor_source = noise_floor(base, data)
     # effects whose values the machine file sets (absolute, not a further factor on top)
     folded = frozenset(
@@ -433,12 +438,22 @@ def decide(
             and sign_flip_p(r.chunk_sq, lead.chunk_sq) > TIE_P
         )
     ]
+    # the rapids, which no fit saw, decide between effects equal on the feed moves where they
+    # tell them apart: a path speed limit or an axis's speed slows the rapids too, a feed
+    # override does not (LinuxCNC 2.9 scales rapids by its rapid override only)
+    rapid = [r.rapid_gap for r in equal]
+    if len(equal) > 1 and all(math.isfinite(g) for g in rapid):
+        least = min(rapid)
+        margin_r = max(floor, TIE_SHARE * least)
+        by_rapids = [r for r in equal if r.rapid_gap - least <= margin_r]
+    else:
+        by_rapids = equal
     order = {name: k for k, name in enumerate(EFFECT_PRIORITY)}
     # an effect the machine file already calibrates (``folded``) is the less likely story;
     # an effect that explains anything was at least switched on: one decision even where
     # its fit left every parameter where it started (path compression at its defaults)
     best = min(
-        equal,
+        by_rapids,
         key=lambda r: (
             r.name in folded,
             max(r.moved, 1),
@@ -448,15 +463,21 @@ def decide(
     )
     ranked.remove(best)
     ranked.insert(0, best)
-    others = [r.name for r in equal if r is not best]
     reason = (
         f"{best.name}: removes {best.removed:.0%} of the held-out gap (p = {best.p:.2g}, "
         f"floor {floor:.1f} mm/min)"
     )
-    if others:
+    slower = [r for r in equal if r not in by_rapids]
+    same = [r.name for r in by_rapids if r is not best]
+    if slower:
         reason += (
-            f"; {', '.join(others)} explain the data as well, {best.name} is the simpler "
-            "explanation"
+            f"; {', '.join(r.name for r in slower)} explain the feed moves as well, but not "
+            f"the rapids (gap there {', '.join(f'{r.rapid_gap:.0f}' for r in slower)} mm/min "
+            f"against {best.rapid_gap:.0f})"
+        )
+    if same:
+        reason += (
+            f"; {', '.join(same)} explain the data as well, {best.name} is the simpler explanation"
         )
     return ranked, best.name, reason
 

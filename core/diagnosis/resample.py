@@ -57,6 +57,11 @@ class Data:
     noise: float = math.nan
     #: recent predicted speeds on the selections of this grid (:func:`_speeds`)
     memo: dict = field(default_factory=dict, repr=False)
+    #: the measured speed on the rapids the trace covers, on the same kind of grid (arc
+    #: length, speed in mm/s, time weight in s): no fit sees it (:func:`rapid_gap`)
+    rapid_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
+    rapid_v: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
+    rapid_weight: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
 
 
 def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
@@ -65,8 +70,6 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
     step = max(step, (hi - lo) / MAX_POINTS)
     grid = np.arange(lo + 0.5 * step, hi, step)
     move = tp.move_at(grid)
-    keep = tp.is_feed[move]
-    grid, move = grid[keep], move[keep]
     # Average the samples at one arc length (stops), then interpolate along the path.
     s_u, first, inv = np.unique(al.s, return_index=True, return_inverse=True)
     v_u = np.bincount(inv, weights=al.v) / np.bincount(inv)
@@ -80,6 +83,14 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
         hole = al.t[first[k]] - al.t[last[k - 1]] > GAP_PERIODS * period
         grid, move = grid[~hole], move[~hole]
     v = np.interp(grid, s_u, v_u)
+    keep = tp.is_feed[move]
+    rapid_s, rapid_v = grid[~keep], v[~keep]
+    # time weights floored at TIME_FLOOR of the fastest measured rapid (no rapid: none kept)
+    slowest = TIME_FLOOR * float(rapid_v.max(initial=0.0))
+    if not slowest > 0:
+        rapid_s, rapid_v = rapid_s[:0], rapid_v[:0]
+    rapid_weight = step / np.maximum(rapid_v, slowest)
+    grid, move, v = grid[keep], move[keep], v[keep]
     feed = tp.feed[move]
     weight = step / np.maximum(v, TIME_FLOOR * feed)
     return Data(
@@ -92,6 +103,9 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
         weight=weight,
         case=case,
         noise=sample_noise(tp, al),
+        rapid_s=rapid_s,
+        rapid_v=rapid_v,
+        rapid_weight=rapid_weight,
     )
 
 
@@ -270,6 +284,20 @@ def gap(preds: Sequence[Prediction], data: Sequence[Data], which: str) -> float:
         sq += float(np.sum(w * r * r))
         n += float(w.sum())
     return math.sqrt(sq / n) * PER_MIN if n > 0 else 0.0
+
+
+def rapid_gap(preds: Sequence[Prediction], data: Sequence[Data]) -> float:
+    """RMS over time of measured - predicted speed (mm/min) on the rapids of every trace
+    (NaN where the traces cover none). No effect is fitted on them: where effects explain
+    the feed moves equally, the rapids are evidence none of them has seen."""
+    sq, n = 0.0, 0.0
+    for d in data:
+        if d.rapid_s.size == 0:
+            continue
+        r = d.rapid_v - preds[d.case].speed_at(d.rapid_s)
+        sq += float(np.sum(d.rapid_weight * r * r))
+        n += float(d.rapid_weight.sum())
+    return math.sqrt(sq / n) * PER_MIN if n > 0 else math.nan
 
 
 def feed_level(data: Sequence[Data]) -> float:
