@@ -575,3 +575,41 @@ def test_the_trace_noise_is_measured_in_time_not_along_the_path(nc, tmp_path):
     # coarse polls: no time estimate
     tp, al = _stop_and_go(nc, tmp_path, sigma=0.5, period=0.1)
     assert math.isnan(sample_noise(tp, al))
+
+
+def test_a_corner_tolerance_fitted_at_its_least_is_a_stop_at_every_corner():
+    """Score5's random_polygons_50160 (exact stop, G61.1): corner_tolerance fitted at its
+    lower bound 0.0005 mm removes 59.8 -> 15.4 mm/min, exact_stop 59.8 -> 14.1 (both p 0.001,
+    within the floor of 9.6 of each other: equal). The fixed order puts a tolerance first,
+    but one whose fit ran to the bound of its range is the stretched story: exact_stop."""
+    from core.diagnosis.diagnose import EffectResult, decide
+
+    tol = EffectResult("corner_tolerance", {"tolerance": 0.0005}, 59.8, 15.4, 15.0, 1, 0.001)
+    stop = EffectResult("exact_stop", {}, 59.8, 14.1, 14.0, 1, 0.001)
+    assert decide([tol, stop], floor=9.6)[1] == "corner_tolerance"
+    assert decide([tol, stop], 9.6, stretched=frozenset({"corner_tolerance"}))[1] == "exact_stop"
+
+
+def test_the_rapids_decide_between_effects_equal_on_the_feed_moves():
+    """Score5's spiral_pocket_50153 (path speed limit 40 mm/s on a one-feed spiral of arcs at
+    F3000): feed_override 0.802 (589.7 -> 20.4 mm/min), path_feed_limit 39.95 mm/s (-> 19.8)
+    and axis_dynamics (-> 19.6) are equal on the feed moves; the rapids, which no fit saw,
+    leave 10794 mm/min with the override (rapids run at 250 mm/s), 962 with axis_dynamics
+    (only X slowed) and 22 with the path limit: named path_feed_limit, and the reason says
+    why. Without rapids (NaN) the fixed order names the override."""
+    from core.diagnosis.diagnose import EffectResult, decide
+
+    def three(rapid):
+        return [
+            EffectResult("axis_dynamics", {}, 589.7, 19.6, 19.0, 4, 0.0, rapid_gap=rapid[0]),
+            EffectResult("path_feed_limit", {}, 589.7, 19.8, 19.0, 1, 0.0, rapid_gap=rapid[1]),
+            EffectResult("feed_override", {}, 589.7, 20.4, 19.0, 1, 0.0, rapid_gap=rapid[2]),
+        ]
+
+    _, best, reason = decide(three((962.0, 22.0, 10794.0)), floor=15.0)
+    assert best == "path_feed_limit"
+    assert "not the rapids (gap there 962, 10794 mm/min against 22)" in reason
+    nan = float("nan")
+    assert decide(three((nan, nan, nan)), floor=15.0)[1] == "feed_override"
+    # rapids that tell nothing apart (within the floor) leave the fixed order
+    assert decide(three((30.0, 22.0, 35.0)), floor=15.0)[1] == "feed_override"

@@ -6,13 +6,13 @@ Gaps in mm/min, times in s; the thresholds quoted come from :mod:`core.diagnosis
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 
 from core.diagnosis.diagnose import Diagnosis
+from core.diagnosis.fit import at_bound
 from core.diagnosis.gaps import GapZone
-from core.diagnosis.rules import ADD_SHARE, AT_BOUND, BEST_SHARE, GAP_SHARE, SIG_P, STOP_SHARE
-from core.engine.effects import Effect, Param
+from core.diagnosis.rules import ADD_SHARE, BEST_SHARE, GAP_SHARE, SIG_P, STOP_SHARE
+from core.engine.effects import Effect
 from core.model.machine import Machine
 
 
@@ -24,26 +24,6 @@ def _fmt_params(params: dict[str, float], eff: Effect) -> str:
         )
         or "-"
     )
-
-
-def at_bound(p: Param, value: float, default: float | None = None) -> bool:
-    """Whether a fitted value sits at one of the parameter's bounds (within AT_BOUND of its
-    range; in log space for log parameters). A bound that is the parameter's ``default``
-    (the value that changes nothing, e.g. a lag of 0 s) is where an unused part of the
-    effect rests, not a stretched fit."""
-
-    def pos(x: float) -> float:
-        if p.log and p.low > 0 and x > 0:
-            return (math.log(x) - math.log(p.low)) / (math.log(p.high) - math.log(p.low))
-        return (x - p.low) / (p.high - p.low)
-
-    if not (math.isfinite(p.high - p.low) and p.high > p.low):
-        return False
-    at_low, at_high = pos(value) <= AT_BOUND, pos(value) >= 1.0 - AT_BOUND
-    if default is not None:
-        at_low &= pos(default) > AT_BOUND
-        at_high &= pos(default) < 1.0 - AT_BOUND
-    return bool(at_low or at_high)
 
 
 def warnings(d: Diagnosis, effects: Mapping[str, Effect], labels: list[str]) -> list[str]:

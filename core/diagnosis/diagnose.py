@@ -19,10 +19,12 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    the noise floor (the machine file's, from ``ncperf calibrate``, else estimated from the
    trace, and never under MIN_FEED_SHARE of F) and by at least BEST_SHARE of the gap. Among
    the effects that clear it, those not significantly worse than the best, or leaving a gap
-   within TIE_SHARE of its gap, are equally good:
-   the one with the fewest parameters the data moved is named, then the first in
-   EFFECT_PRIORITY. "None" is an answer: the model already explains the trace, or what is
-   left is noise or an effect not in the list. Effects are then added greedily while each
+   within TIE_SHARE of its gap, are equally good: the rapids, which no fit sees, drop those
+   they show wrong (a rapid gap more than the floor above the least); then one the machine
+   file does not set, one whose fit did not run to a bound, the one with the fewest
+   parameters the data moved and the first in EFFECT_PRIORITY are named, in that order.
+   "None" is an answer: the model already explains the trace, or what is left is noise or
+   an effect not in the list. Effects are then added greedily while each
    clears the same test on what is left (ADD_SHARE of it), until less than STOP_SHARE of the
    gap before is left.
 """
@@ -39,7 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.diagnosis.align import Alignment
-from core.diagnosis.fit import fit, predict_all
+from core.diagnosis.fit import at_bound, fit, predict_all
 from core.diagnosis.gaps import GapZone, gap_zones
 from core.diagnosis.objective import FEED, Objective
 from core.diagnosis.resample import (
@@ -239,7 +241,17 @@ def diagnose_cases(
         for name, _, _ in base.machine.effects
         if name in effects and not effects[name].relative
     )
-    results, best, reason = decide(results, floor, folded)
+    # effects whose fit ran to a bound of a parameter: stretched to cover for something else
+    stretched = frozenset(
+        r.name
+        for r in results
+        if any(
+            at_bound(p, r.params[p.name], p.default_for(base.machine))
+            for p in effects[r.name].params
+            if p.name in r.params
+        )
+    )
+    results, best, reason = decide(results, floor, folded, stretched)
 
     chosen: list[str] = []
     chosen_params: dict[str, dict[str, float]] = {}
@@ -394,13 +406,19 @@ def noise_floor(base: Setup, data: Sequence[Data]) -> tuple[float, str]:
 
 
 def decide(
-    results: Sequence[EffectResult], floor: float, folded: frozenset[str] = frozenset()
+    results: Sequence[EffectResult],
+    floor: float,
+    folded: frozenset[str] = frozenset(),
+    stretched: frozenset[str] = frozenset(),
 ) -> tuple[list[EffectResult], str | None, str]:
     """Rank the effects and name the best one, or none (see the module docstring).
 
     ``folded``: effects the machine file already sets (calibrated): among equally good
-    effects they come last. Returns the effects in rank order (the named or leading one
-    first, then by held-out gap), the named effect and the reason in one sentence."""
+    effects they come last; ``stretched``: effects whose fit ran to a bound of a parameter
+    (a corner tolerance at its least, standing for a stop at every corner): among equally
+    good effects they come after the others. Returns the effects in rank order (the named or
+    leading one first, then by held-out gap), the named effect and the reason in one
+    sentence."""
     ranked = sorted(results, key=lambda r: r.held_out_gap_after)
     if not ranked:
         return ranked, None, "no effects to try"
@@ -456,6 +474,7 @@ def decide(
         by_rapids,
         key=lambda r: (
             r.name in folded,
+            r.name in stretched,
             max(r.moved, 1),
             order.get(r.name, len(order)),
             r.held_out_gap_after,

@@ -15,7 +15,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.diagnosis.objective import FEED, Objective
-from core.diagnosis.rules import GRID_1D, GRID_2D, GRID_ND, REFINE
+from core.diagnosis.rules import AT_BOUND, GRID_1D, GRID_2D, GRID_ND, REFINE
 from core.engine.effects import Effect, Param, Setup
 from core.engine.indicators import Indicator, IndicatorSource
 from core.engine.predict import Prediction, predict, retimed, same_plan
@@ -210,6 +210,26 @@ def _refined(
         if score(trial) <= score(best) * (1 + TOL.rel_equal):
             best = trial
     return best
+
+
+def at_bound(p: Param, value: float, default: float | None = None) -> bool:
+    """Whether a fitted value sits at one of the parameter's bounds (within AT_BOUND of its
+    range; in log space for log parameters). A bound that is the parameter's ``default``
+    (the value that changes nothing, e.g. a lag of 0 s) is where an unused part of the
+    effect rests, not a stretched fit."""
+
+    def pos(x: float) -> float:
+        if p.log and p.low > 0 and x > 0:
+            return (math.log(x) - math.log(p.low)) / (math.log(p.high) - math.log(p.low))
+        return (x - p.low) / (p.high - p.low)
+
+    if not (math.isfinite(p.high - p.low) and p.high > p.low):
+        return False
+    at_low, at_high = pos(value) <= AT_BOUND, pos(value) >= 1.0 - AT_BOUND
+    if default is not None:
+        at_low &= pos(default) > AT_BOUND
+        at_high &= pos(default) < 1.0 - AT_BOUND
+    return bool(at_low or at_high)
 
 
 def _key(eff: Effect, values: dict[str, float]) -> tuple[float, ...]:

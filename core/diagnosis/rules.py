@@ -59,8 +59,10 @@ MIN_FEED_SHARE = 0.005
 BEST_SHARE = 0.10
 #: Effects not worse than the best by more than the floor nor significantly (the same test
 #: gives p > TIE_P), or leaving a gap within TIE_SHARE of the best's, explain the data equally
-#: well: one the machine file does not already set is named before one it does (its value
-#: was calibrated), then the one with the fewest parameters the data moved, then the one
+#: well: the rapids (no fit sees them) drop those that leave a rapid gap more than the floor
+#: (or TIE_SHARE) above the least; one the machine file does not already set is named before
+#: one it does (its value was calibrated), then one whose fit did not run to a bound (AT_BOUND),
+#: then the one with the fewest parameters the data moved, then the one
 #: first in EFFECT_PRIORITY (what a
 #: controller more often does, and the simpler story, comes first).
 TIE_P = 0.05
