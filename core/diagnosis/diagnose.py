@@ -57,6 +57,9 @@ from core.diagnosis.resample import (
 from core.diagnosis.rules import (
     ADD_SHARE,
     BEST_SHARE,
+    CLEAR_FLOOR,
+    CLEAR_P,
+    CLEAR_SHARE,
     EFFECT_PRIORITY,
     GAP_COLOURS,
     GAP_EDGES,
@@ -302,14 +305,15 @@ def clears(g_before: float, g_after: float, p: float, floor: float, share: float
     """The test an effect must pass to be named or added (mm/min RMS held-out gaps before and
     after it, and the p value of the reduction): it removes at least ``share`` of the gap,
     at least the floor, and significantly -- p <= SIG_P, or STRONG_K times the floor where
-    it shows in too few places for the test."""
+    it shows in too few places for the test; or CLEAR_SHARE of the gap at p <= CLEAR_P and
+    CLEAR_FLOOR of the floor."""
     gain = g_before - g_after
-    return (
-        g_before > 0
-        and gain / g_before >= share
-        and gain >= floor
-        and (p <= SIG_P or gain >= STRONG_K * floor)
-    )
+    if not (g_before > 0 and gain / g_before >= share):
+        return False
+    if gain >= floor and (p <= SIG_P or gain >= STRONG_K * floor):
+        return True
+    # a large share of the gap, removed far beyond chance: half the floor will do
+    return gain / g_before >= CLEAR_SHARE and p <= CLEAR_P and gain >= CLEAR_FLOOR * floor
 
 
 def add_effects(
