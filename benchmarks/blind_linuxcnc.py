@@ -1,15 +1,16 @@
 """The blind diagnosis benchmark: programs and settings the diagnosis was not tuned on.
 
-Not a test: ``python benchmarks/blind_linuxcnc.py --seeds tune|score|score2|score3|score4|score5|score6
-[--cache DIR] [--jobs 2] [--only N]`` (needs LinuxCNC and ../shared/tools/linuxcnc; the traces are
-recorded in real time, about 25 min per seed set, and cached).
+Not a test: ``python benchmarks/blind_linuxcnc.py --seeds SET [--jobs 2] [--only N]`` (SET:
+tune, score, score2-score6, drawn7; needs LinuxCNC and ../shared/tools/linuxcnc; the traces
+are recorded in real time, about 25 min per seed set, and cached).
 
 Programs come from ten families (benchmarks/blind/families.py: random polygons, trochoidal
 slots, gears of chords, free-form chord paths, spiral pockets, a dome raster, engraving,
 thread milling, a 2.5D part, long kinked lines), each drawn from a seed. Seed sets are kept
 apart: ``tune`` (seeds 100-999), used while developing the effects and the decision rule,
 and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999), ``score3`` (30000-30999),
-``score4`` (40000-40999), ``score5`` (50000-50999) and ``score6`` (60000-60999),
+``score4`` (40000-40999), ``score5`` (50000-50999), ``score6`` (60000-60999) and
+``drawn7`` (70500-71009; each case's setting drawn from a range instead of the fixed values),
 each run for the figures in the README (the README says which were looked at afterwards).
 Every case is one program run through LinuxCNC 2.9's real planner on the harness's default
 mill with ONE setting changed (per-axis acceleration or speed, servo period, the path
@@ -26,6 +27,7 @@ kinds of control, and the cycle-time error of the preset on the unchanged runs.
 from __future__ import annotations
 
 import argparse
+import dataclasses
 import datetime
 import math
 import multiprocessing as mp
@@ -67,6 +69,7 @@ SEEDS = {
     "score4": 40000,
     "score5": 50000,
     "score6": 60000,
+    "drawn7": 70500,
 }
 #: Programs per changed setting.
 PER_VARIANT = 4
@@ -196,6 +199,75 @@ VARIANTS = (
 )
 CONTROL = Variant("unchanged", "unchanged machine", None, ALL)
 
+#: Seed sets whose settings are drawn, not the fixed values above: every case gets its own
+#: value from the range of its kind (seeded by the case), so that neither the programs nor
+#: the settings are ones the effects and the decision rule were developed on. The values of
+#: the fixed sets lie inside these ranges.
+DRAWN = {"drawn7"}
+
+
+def _u(rng: np.random.Generator, lo: float, hi: float, digits: int = 0) -> float:
+    return round(float(rng.uniform(lo, hi)), digits)
+
+
+def drawn(v: Variant, seed: int) -> Variant:
+    """Variant ``v`` with its setting drawn for the case of ``seed`` (same kind, same key)."""
+    rng = np.random.default_rng([seed, 7])
+    k = v.key
+    if k.startswith("acc_") and k != "acc_mix":
+        lo, hi = {"acc_x": (600, 1400), "acc_y": (500, 1400), "acc_z": (300, 1000)}.get(
+            k, (700, 1500)
+        )
+        a = _u(rng, lo, hi, -1)
+        axes = {"acc_x": "X", "acc_y": "Y", "acc_z": "Z"}.get(k, "XYZ")
+        label = f"{axes if axes != 'XYZ' else 'all axes'} acceleration {a:g} mm/s^2"
+        return dataclasses.replace(v, label=label, sets=tuple(axis_sets(axes, acc=a)))
+    if k == "acc_mix":
+        x, y, z = _u(rng, 2500, 4000, -1), _u(rng, 600, 1200, -1), _u(rng, 1000, 2500, -1)
+        sets = axis_sets("X", acc=x) + axis_sets("Y", acc=y) + axis_sets("Z", acc=z)
+        return dataclasses.replace(v, label=f"X {x:g}, Y {y:g}, Z {z:g} mm/s^2", sets=tuple(sets))
+    if k in ("vel_x", "vel_all"):
+        vel = _u(rng, 30, 55) if k == "vel_x" else _u(rng, 35, 60)
+        axes = "X" if k == "vel_x" else "XYZ"
+        label = f"{'X' if axes == 'X' else 'all axes'} speed {vel:g} mm/s"
+        return dataclasses.replace(v, label=label, sets=tuple(axis_sets(axes, vel=vel)))
+    if k.startswith("servo"):
+        lo, hi = {"servo2": (1.5, 2.5), "servo3": (2.5, 3.5), "servo4": (3.5, 5.0)}[k]
+        ms = _u(rng, lo, hi, 1)
+        return dataclasses.replace(
+            v, label=f"servo period {ms:g} ms", sets=(f"EMCMOT.SERVO_PERIOD={int(ms * 1e6)}",)
+        )
+    if k.startswith("tol_"):
+        lo, hi = {"tol_fine": (0.0005, 0.003), "tol_05": (0.02, 0.07), "tol_coarse": (0.08, 0.2)}[k]
+        tol = round(float(np.exp(rng.uniform(np.log(lo), np.log(hi)))), 4)
+        return dataclasses.replace(v, label=f"blended with G64 P{tol:g}", program=f"P{tol:g}")
+    if k.startswith("ovr_"):
+        f = _u(rng, 0.6, 0.9, 2) if k == "ovr_80" else _u(rng, 1.1, 1.3, 2)
+        return dataclasses.replace(v, label=f"feed override {f:g}", override=f)
+    if k == "path_v":
+        vel = _u(rng, 30, 55)
+        return dataclasses.replace(
+            v, label=f"path speed limit {vel:g} mm/s", sets=(f"TRAJ.MAX_LINEAR_VELOCITY={vel:g}",)
+        )
+    if v.post is not None:
+        effect, _ = v.post
+        lo, hi = {
+            "lag_5": (3, 8),
+            "lag_20": (12, 30),
+            "lag_60": (40, 80),
+            "filt_10": (8, 15),
+            "filt_30": (20, 40),
+            "filt_60": (45, 80),
+        }[k]
+        ms = _u(rng, lo, hi)
+        what = (
+            "actual positions, {:g} ms servo lag"
+            if effect == "servo_lag"
+            else ("setpoint filter {:g} ms")
+        )
+        return dataclasses.replace(v, label=what.format(ms), post=(effect, ms / 1000.0))
+    return v  # exact stop: nothing to draw
+
 
 @dataclass(frozen=True)
 class Case:
@@ -219,7 +291,8 @@ def cases(seeds: str) -> list[Case]:
         while len(fams) < PER_VARIANT:
             fams += fams
         for j, fam in enumerate(fams[:PER_VARIANT]):
-            out.append(Case(v, fam, base + 10 * k + j))
+            seed = base + 10 * k + j
+            out.append(Case(drawn(v, seed) if seeds in DRAWN else v, fam, seed))
     for j, fam in enumerate(ALL):
         out.append(Case(CONTROL, fam, base + 500 + j))
     return out
