@@ -386,6 +386,7 @@ def diagnose_case(args: tuple[Case, str]) -> dict:
                 r.moved,
                 r.p,
                 r.chunk_sq,
+                r.rapid_gap,
             )
             for r in d.effects
         ],

@@ -610,6 +610,11 @@ def test_the_rapids_decide_between_effects_equal_on_the_feed_moves():
     _, best, reason = decide(three((962.0, 22.0, 10794.0)), floor=15.0)
     assert best == "path_feed_limit"
     assert "not the rapids (gap there 962, 10794 mm/min against 22)" in reason
+    # an effect behind the best by less than the floor, but significantly (not equal), is
+    # weighed too when the rapids tell them apart (score6's spiral_pocket_60151)
+    axis = EffectResult("axis_dynamics", {}, 597.0, 6.3, 6.0, 5, 0.0, np.full(32, 1.0), 965.0)
+    path = EffectResult("path_feed_limit", {}, 597.0, 6.8, 6.0, 1, 0.0, np.full(32, 2.0), 22.0)
+    assert decide([axis, path], floor=15.0)[1] == "path_feed_limit"
     nan = float("nan")
     assert decide(three((nan, nan, nan)), floor=15.0)[1] == "feed_override"
     # rapids that tell nothing apart (within the floor) leave the fixed order
