@@ -6,6 +6,7 @@ Gaps in mm/min, times in s; the thresholds quoted come from :mod:`core.diagnosis
 
 from __future__ import annotations
 
+import math
 from collections.abc import Mapping
 
 from core.diagnosis.diagnose import Diagnosis
@@ -106,15 +107,22 @@ def report(
     )
     params = [_fmt_params(r.params, effects[r.name]) for r in d.effects]
     width = max([len("parameters"), *map(len, params)])
+    rapids = any(math.isfinite(r.rapid_gap) for r in d.effects)
     lines.append(
         f"    {'#':>2s}  {'effect':28s} {'parameters':{width}s} {'before':>8s} "
-        f"{'after':>8s} {'removed':>8s}"
+        f"{'after':>8s} {'removed':>8s}" + (f" {'rapids':>8s}" if rapids else "")
     )
     for k, (r, ps) in enumerate(zip(d.effects, params, strict=True), start=1):
         lines.append(
             f"    {k:2d}  {r.name:28s} {ps:{width}s} "
             f"{r.held_out_gap_before:8.1f} {r.held_out_gap_after:8.1f} "
             f"{r.removed * 100:7.0f}%"
+            + (f" {r.rapid_gap:8.1f}" if rapids and math.isfinite(r.rapid_gap) else "")
+        )
+    if rapids:
+        lines.append(
+            "                   (rapids: the gap on the rapids, which no fit sees; they decide "
+            "between effects that fit the feed moves alike)"
         )
     lines.append(
         f"  to be named      an effect must remove at least {BEST_SHARE:.0%} of the held-out "
@@ -201,6 +209,7 @@ def to_json(
                 "removed": round(r.removed, 4),
                 "p": round(r.p, 5),
                 "parameters_moved": r.moved,
+                "rapid_gap": round(r.rapid_gap, 3) if math.isfinite(r.rapid_gap) else None,
             }
             for r in d.effects
         ],

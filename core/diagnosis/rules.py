@@ -68,8 +68,8 @@ CLEAR_P = 0.001
 CLEAR_FLOOR = 0.5
 #: Effects not worse than the best by more than the floor nor significantly (the same test
 #: gives p > TIE_P), or leaving a gap within TIE_SHARE of the best's, explain the data equally
-#: well: the rapids (no fit sees them) drop those that leave a rapid gap more than the floor
-#: (or TIE_SHARE) above the least; one the machine file does not already set is named before
+#: well: the rapids (no fit sees them) drop those that leave a rapid gap over twice the least
+#: and the floor above it; one the machine file does not already set is named before
 #: one it does (its value was calibrated), then one whose fit did not run to a bound (AT_BOUND),
 #: then the one with the fewest parameters the data moved, then the one
 #: first in EFFECT_PRIORITY (what a
