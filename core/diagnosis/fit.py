@@ -43,17 +43,25 @@ def predict_all(
     tps: Sequence[ToolPath],
     setup: Setup,
     plans: list[tuple[Setup, list[Prediction]]] | None = None,
+    *,
+    keep: bool = True,
 ) -> list[Prediction]:
     """The prediction of ``setup`` for every program. ``plans``: predictions made before
     (most recent last, kept to PLANS); one of a setup that plans alike (differs in the
-    time-domain filters only) gives its evaluations and profiles, and this one is added."""
-    if plans is not None:
+    time-domain filters only) gives its evaluations and profiles, and this one is added;
+    else one evaluated alike gives its profile (:func:`core.engine.predict.predict`).
+    ``keep`` False: the plans only give profiles (the predictions are made again, and not
+    added)."""
+    if plans is not None and keep:
         for k in range(len(plans) - 1, -1, -1):
             setup_k, preds_k = plans[k]
             if same_plan(setup_k, setup):
                 return [retimed(p, setup) for p in preds_k]
-    preds = [predict(indicators_of, tp, setup) for tp in tps]
-    if plans is not None:
+    earlier = plans or []
+    preds = [
+        predict(indicators_of, tp, setup, [p[i] for _, p in earlier]) for i, tp in enumerate(tps)
+    ]
+    if plans is not None and keep:
         plans.append((setup, preds))
         del plans[:-PLANS]
     return preds
@@ -88,7 +96,7 @@ def fit(
 
     def result(best: dict[str, float]) -> tuple[dict[str, float], list[Prediction]]:
         """The fitted values and their predictions, made again from the kept setup."""
-        return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
+        return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1], plans, keep=False)
 
     if not eff.params:
         score({})
