@@ -43,17 +43,25 @@ def predict_all(
     tps: Sequence[ToolPath],
     setup: Setup,
     plans: list[tuple[Setup, list[Prediction]]] | None = None,
+    *,
+    keep: bool = True,
 ) -> list[Prediction]:
     """The prediction of ``setup`` for every program. ``plans``: predictions made before
     (most recent last, kept to PLANS); one of a setup that plans alike (differs in the
-    time-domain filters only) gives its evaluations and profiles, and this one is added."""
-    if plans is not None:
+    time-domain filters only) gives its evaluations and profiles, and this one is added;
+    else one evaluated alike gives its profile (:func:`core.engine.predict.predict`).
+    ``keep`` False: the plans only give profiles (the predictions are made again, and not
+    added)."""
+    if plans is not None and keep:
         for k in range(len(plans) - 1, -1, -1):
             setup_k, preds_k = plans[k]
             if same_plan(setup_k, setup):
                 return [retimed(p, setup) for p in preds_k]
-    preds = [predict(indicators_of, tp, setup) for tp in tps]
-    if plans is not None:
+    earlier = plans or []
+    preds = [
+        predict(indicators_of, tp, setup, [p[i] for _, p in earlier]) for i, tp in enumerate(tps)
+    ]
+    if plans is not None and keep:
         plans.append((setup, preds))
         del plans[:-PLANS]
     return preds
@@ -74,21 +82,30 @@ def fit(
     defaults = eff.start(m)
     indicators_of = _remembered(indicators_of)
     # the gap and setup of every candidate scored (not its predictions: hundreds of
-    # profiles; those of the best are made again, the same, at the end)
+    # profiles; only those of the lowest gap so far, which is most often the fitted one,
+    # are kept -- the others' are made again, the same, at the end)
     cache: dict[tuple, tuple[float, Setup]] = {}
     plans: list[tuple[Setup, list[Prediction]]] = []
+    lowest: list[tuple[tuple, float, list[Prediction]]] = []
 
     def score(values: dict[str, float]) -> float:
         key = _key(eff, values)
         if key not in cache:
             setup = eff.apply(base, values)
             preds = predict_all(indicators_of, tps, setup, plans)
-            cache[key] = (objective.gap(preds, data, "calibration"), setup)
+            g = objective.gap(preds, data, "calibration")
+            cache[key] = (g, setup)
+            if not lowest or g < lowest[0][1]:
+                lowest[:] = [(key, g, preds)]
         return cache[key][0]
 
     def result(best: dict[str, float]) -> tuple[dict[str, float], list[Prediction]]:
-        """The fitted values and their predictions, made again from the kept setup."""
-        return best, predict_all(indicators_of, tps, cache[_key(eff, best)][1])
+        """The fitted values and their predictions: those kept, or made again from the kept
+        setup (the same values: a prediction is a function of its setup)."""
+        key = _key(eff, best)
+        if lowest and lowest[0][0] == key:
+            return best, lowest[0][2]
+        return best, predict_all(indicators_of, tps, cache[key][1], plans, keep=False)
 
     if not eff.params:
         score({})

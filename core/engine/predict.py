@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
+from collections.abc import Sequence
 from dataclasses import dataclass
 from functools import cached_property
 
@@ -230,7 +231,66 @@ def retimed(pred: Prediction, setup: Setup) -> Prediction:
     )
 
 
-def predict(indicators_of: IndicatorSource, tp: ToolPath, setup: Setup) -> Prediction:
+def _same_bits(a: object, b: object) -> bool:
+    """Whether two evaluation fields are certainly the same input: one object, None both,
+    equal tuples, or arrays of one dtype and shape with the same bytes (NaNs and signed
+    zeros included)."""
+    if a is b:
+        return True
+    if a is None or b is None:
+        return False
+    if isinstance(a, tuple) and isinstance(b, tuple):
+        return a == b
+    if isinstance(a, np.ndarray) and isinstance(b, np.ndarray):
+        if a.dtype != b.dtype or a.shape != b.shape:
+            return False
+        x = np.ascontiguousarray(a).reshape(-1).view(np.uint8)
+        y = np.ascontiguousarray(b).reshape(-1).view(np.uint8)
+        return bool(np.array_equal(x, y))
+    return False
+
+
+def same_evaluation(a: Evaluation, b: Evaluation) -> bool:
+    """Whether two evaluations are the same input to :func:`build_profile`: one tool path
+    and one machine (the same objects) and every other field bit for bit the same."""
+    if a.toolpath is not b.toolpath or a.machine is not b.machine:
+        return False
+    return all(
+        _same_bits(getattr(a, f.name), getattr(b, f.name))
+        for f in dataclasses.fields(a)
+        if f.name not in ("toolpath", "machine")
+    )
+
+
+def _profile_of(ev: Evaluation, setup: Setup, earlier: Sequence[Prediction]) -> Profile | None:
+    """The profile of ``ev`` under ``setup``: that of an ``earlier`` prediction built from
+    the same inputs (:func:`same_evaluation`, the same look-ahead, end and arc factors) --
+    build_profile is a function of them alone, so its columns are the ones a new build
+    gives -- with ``ev`` as its evaluation; else built."""
+    if not setup.ramps:
+        return None
+    for old in reversed(earlier):
+        su = old.setup
+        if (
+            old.profile is not None
+            and su.ramps
+            and _same(su.lookahead, setup.lookahead)
+            and _same(su.end_factor, setup.end_factor)
+            and _same(su.arc_factor, setup.arc_factor)
+            and same_evaluation(old.evaluation, ev)
+        ):
+            return dataclasses.replace(old.profile, evaluation=ev)
+    return build_profile(
+        ev, lookahead=setup.lookahead, end_factor=setup.end_factor, arc_factor=setup.arc_factor
+    )
+
+
+def predict(
+    indicators_of: IndicatorSource,
+    tp: ToolPath,
+    setup: Setup,
+    earlier: Sequence[Prediction] = (),
+) -> Prediction:
     """The prediction of ``setup`` on ``tp`` (see :mod:`core.engine.effects` for the steps).
 
     Parameters
@@ -240,6 +300,9 @@ def predict(indicators_of: IndicatorSource, tp: ToolPath, setup: Setup) -> Predi
         :meth:`core.facade.Ncperf.indicators`.
     tp : ToolPath
     setup : Setup
+    earlier : sequence of Prediction
+        Predictions made before (a fit's recent candidates): where one was built from the
+        same evaluation, its profile is taken, not built again (the same values).
     """
     tp2 = tp
     if setup.feed_scale != 1.0:
@@ -312,11 +375,5 @@ def predict(indicators_of: IndicatorSource, tp: ToolPath, setup: Setup) -> Predi
             dataclasses.replace(ind, feed=ind.feed * setup.cap_scale) for ind in indicators
         ]
     ev = combine(tp2, m, indicators)
-    profile = (
-        build_profile(
-            ev, lookahead=setup.lookahead, end_factor=setup.end_factor, arc_factor=setup.arc_factor
-        )
-        if setup.ramps
-        else None
-    )
+    profile = _profile_of(ev, setup, earlier)
     return Prediction(setup=setup, evaluation=ev, profile=profile, path=tp)
