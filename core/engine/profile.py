@@ -68,8 +68,10 @@ JERK_CONVERGED = 1e-4
 #: Moves per piece of a round's elementwise work: its temporaries stay in the cache.
 CACHE_PIECE = 1 << 14
 #: A round finds the ramps again only around the moves whose marks changed when those are
-#: at most 1 / LOCAL_SHARE of the moves (else over all of them: the same values).
-LOCAL_SHARE = 16
+#: at most 1 / LOCAL_SHARE of the moves, and the ramps through them at most 1 / LOCAL_REACH
+#: (else over all of them: the same values).
+LOCAL_SHARE = 32
+LOCAL_REACH = 8
 #: Most moves a ramp chain's ends are searched at a time (from 2, doubling).
 CHAIN_WINDOW = 64
 
@@ -1309,7 +1311,7 @@ class _Rounds:
             keep = np.concatenate([[True], first[1:] != first[:-1]])
             first, last = first[keep], last[keep]
         size = last - first + 1
-        if LOCAL_SHARE * (int(size.sum()) + alone.size) > n:
+        if LOCAL_REACH * (int(size.sum()) + alone.size) > n:
             return None
         # the ramps' speed changes, as _ramp_dv makes them
         if rising:
