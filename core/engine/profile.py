@@ -318,12 +318,21 @@ def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[ND
     jerk = np.broadcast_to(jerk, share.shape[1:])
     a = np.full(share.shape[0], np.inf)
     j = np.full(share.shape[0], np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # (in pieces, each column's quotient written where the axis moves into an array of inf:
+    # the values of np.where(moves, limit / col, inf), without its (n,) temporaries)
+    size = min(share.shape[0], CACHE_PIECE)
+    col, quot = np.empty(size), np.empty(size)
+    moves = np.empty(size, dtype=bool)
+    for s in pieces(share.shape[0], CACHE_PIECE):
+        m = s.stop - s.start
+        c, q, mv = col[:m], quot[:m], moves[:m]
         for k in range(share.shape[1]):
-            col = share[:, k]
-            moves = col > 0
-            np.minimum(a, np.where(moves, acc[k] / col, np.inf), out=a)
-            np.minimum(j, np.where(moves, jerk[k] / col, np.inf), out=j)
+            c[...] = share[s, k]
+            np.greater(c, 0, out=mv)
+            for limit, out in ((acc[k], a[s]), (jerk[k], j[s])):
+                q.fill(np.inf)
+                np.divide(limit, c, out=q, where=mv)
+                np.minimum(out, q, out=out)
     # A move with no direction (zero length, NaN) gets the lowest axis limits.
     a = np.where(np.isfinite(a), a, acc.min())
     j = np.where(np.isnan(j) | (np.isinf(j) & np.isfinite(jerk).all()), jerk.min(), j)
