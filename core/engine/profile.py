@@ -892,6 +892,15 @@ def _ramp_changes(v0, peak, v1, marks, rising: bool) -> tuple[NDArray, NDArray, 
     return phase, dv, low
 
 
+def _denominator(a_up: NDArray, a_dn: NDArray) -> NDArray:
+    """1 / a_up + 1 / a_dn, the peak's denominator as :func:`_moves` makes it (made where
+    used, not kept through the rounds: 8 MB a million moves off the profile's peak)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        den = 1.0 / a_up
+        den += 1.0 / a_dn
+    return den
+
+
 def _marks_of(v0, v1, a_up, a_dn, den, between, cap) -> tuple[NDArray, ...]:
     """The marks of :meth:`_Rounds._all_marks` of moves from their columns (gathered): the
     peak, whether they accelerate and brake, and whether they accelerate through their end
@@ -950,9 +959,6 @@ class _Rounds:
         self.a_up, self.a_dn = acc.copy(), acc.copy()
         self.term_up = _pass_terms(self.a_up, holds.inner())
         self.term_dn = self.term_up.copy()
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.den = 1.0 / self.a_up
-            self.den += 1.0 / self.a_dn
         n = acc.size
         self.step_up = np.zeros(n, dtype=np.int8)
         self.step_dn = np.zeros(n, dtype=np.int8)
@@ -1028,7 +1034,7 @@ class _Rounds:
                 v[k + 1],
                 self.a_up[k],
                 self.a_dn[k],
-                self.den[k],
+                _denominator(self.a_up[k], self.a_dn[k]),
                 self.holds.between[k],
                 self.cap[k],
             )
@@ -1069,7 +1075,10 @@ class _Rounds:
                 pk += li
                 np.divide(q[1:], a_dn[s], out=t)
                 pk += t
-                pk /= self.den[s]
+                np.divide(1.0, a_up[s], out=li)
+                np.divide(1.0, a_dn[s], out=t)
+                li += t
+                pk /= li  # (the peak's denominator, as _moves makes it)
                 np.maximum(pk, 0.0, out=pk)
                 np.sqrt(pk, out=pk)
                 np.minimum(self.cap[s], pk, out=pk)
@@ -1161,8 +1170,8 @@ class _Rounds:
         return hi if chain is None else hi[chain]
 
     def _direction(self, rising, phase, through, v0, v1, peak, near) -> float:
-        """The next accelerations of one direction (updated in place, with the passes' terms
-        and the peak's denominator); returns the largest relative change.
+        """The next accelerations of one direction (updated in place, with the passes'
+        terms); returns the largest relative change.
 
         :func:`_ramp_changes` on the moves in a ramp phase gives each the speed change of
         its ramp, hence its effective acceleration (``acc`` elsewhere); where a move's
@@ -1191,7 +1200,7 @@ class _Rounds:
         at_behind = np.flatnonzero(behind) if isinstance(cand, slice) else cand[behind]
         self.behind[rising] = (at_behind, new[behind])
         del behind, at_behind
-        # the terms and the denominator follow where the acceleration changed
+        # the terms follow where the acceleration changed
         moved = out != old
         del new, old
         if not moved.all():
@@ -1202,10 +1211,6 @@ class _Rounds:
         self.moved.append(cand)
         off[cand] = out != acc[cand]
         term[cand] = _pass_terms(out, self.holds.inner(cand))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            den = 1.0 / self.a_up[cand]
-            den += 1.0 / self.a_dn[cand]
-        self.den[cand] = den
         if rising:
             self.step_up = step
         else:
