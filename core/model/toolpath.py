@@ -412,8 +412,12 @@ class ToolPath:
         out[a["idx"]] = g.arc_length(a["radius"], self.sweep[a["idx"]], a["pitch"])
         return out
 
-    def _arc_tangents(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
-        out = g.unit(self.end - self.start)
+    def _arc_tangents(self, points: NDArray[np.float64], other: str) -> NDArray[np.float64]:
+        """Unit tangents at ``points`` (the moves' starts or ends): the chord's on lines,
+        copied from the ``other`` end's where those are made (the same rows), and the
+        arcs' own."""
+        made = self.__dict__.get(other)
+        out = made.copy() if made is not None else g.unit(self.end - self.start)
         a = self._arc
         for b in pieces(a["idx"].size):
             k = a["idx"][b]
@@ -425,12 +429,12 @@ class ToolPath:
     @cached_property
     def tangent_start(self) -> NDArray[np.float64]:
         """(n, 3) unit tangent at the start of each move."""
-        return self._arc_tangents(self.start)
+        return self._arc_tangents(self.start, "tangent_end")
 
     @cached_property
     def tangent_end(self) -> NDArray[np.float64]:
         """(n, 3) unit tangent at the end of each move."""
-        return self._arc_tangents(self.end)
+        return self._arc_tangents(self.end, "tangent_start")
 
     @cached_property
     def curvature(self) -> NDArray[np.float64]:
