@@ -675,24 +675,37 @@ def _pass_terms(a: NDArray, inner: NDArray) -> NDArray:
 
 
 def _passes_of(
-    b2: NDArray, up: NDArray, dn: NDArray, work: tuple[NDArray, NDArray] | None = None
+    b2: NDArray,
+    up: NDArray,
+    dn: NDArray,
+    work: tuple[NDArray, NDArray] | None = None,
+    *,
+    out: NDArray | None = None,
+    finite: bool = False,
 ) -> NDArray:
     """:func:`_passes` from the squared caps ``b2`` and the :func:`_pass_terms` of both
     directions (the rounds of :func:`build_profile` keep the terms and renew only those of
     the moves whose acceleration changed). (Written with ``out=``: the same operations in
     the same order, without a temporary per step; ``work``: two (n + 1,) arrays to write
-    the sums and the backward pass into, which the rounds keep from pass to pass.)"""
+    the sums and the backward pass into, which the rounds keep from pass to pass; ``out``:
+    an (n + 1,) array for the speeds, else a new one.)
+
+    ``finite``: the caller knows ``b2`` and the terms to be finite. Then no sum or
+    difference the passes take the minima of is NaN (the sums of terms >= 0 may overflow
+    to inf, never to NaN) nor -0.0 (b2 >= +0, W >= +0), and fmin is minimum there, a
+    third faster."""
     n1 = b2.size
     w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
+    least = np.fmin if finite else np.minimum
     w[0] = 0.0
     np.cumsum(up, out=w[1:])
-    fwd = np.subtract(b2, w)
-    np.minimum.accumulate(fwd, out=fwd)
+    fwd = np.subtract(b2, w, out=out)
+    least.accumulate(fwd, out=fwd)
     fwd += w
     np.cumsum(dn, out=w[1:])
     np.add(b2, w, out=bwd)
     rev = bwd[::-1]
-    np.minimum.accumulate(rev, out=rev)
+    least.accumulate(rev, out=rev)
     bwd -= w
     np.minimum(fwd, bwd, out=fwd)
     np.minimum(fwd, b2, out=fwd)
@@ -970,6 +983,13 @@ class _Rounds:
         self.last_dn: tuple[NDArray, NDArray, NDArray] | None = None
         self.b2 = caps * caps
         self.work = (np.empty(caps.size), np.empty(caps.size))
+        self.spare: NDArray | None = None  # (see passes)
+        # the squared caps and the terms are finite (see _passes_of)
+        self.finite = bool(
+            np.isfinite(self.b2).all()
+            and np.isfinite(self.term_up).all()
+            and np.isfinite(self.term_dn).all()
+        )
         # last round's marks (:meth:`step`): each move's peak, whether it accelerates or
         # brakes, and through[k + 1] (move k links its ramp to the next or previous one),
         # with the boundary speeds they were made from; None before the first round
@@ -983,8 +1003,14 @@ class _Rounds:
 
     def passes(self) -> NDArray:
         """:func:`_passes` at the current accelerations (the squared caps and the passes'
-        work arrays made once for all the rounds)."""
-        return _passes_of(self.b2, self.term_up, self.term_dn, self.work)
+        work arrays made once for all the rounds). The speeds go into the older of two
+        arrays the rounds take turns with: the newer is the last round's (``v_last``),
+        the older no round reads any more."""
+        out = self.spare
+        self.spare = self.v_last if self.v_last.size else None
+        return _passes_of(
+            self.b2, self.term_up, self.term_dn, self.work, out=out, finite=self.finite
+        )
 
     def step(self, v: NDArray) -> float:
         """One round from the boundary speeds ``v``: the accelerations of the next (in
@@ -999,7 +1025,7 @@ class _Rounds:
             self.marks = self._all_marks(v)
         else:
             near = self._update_marks(v)
-        self.v_last = v  # (the passes make a new array each time: kept, not copied)
+        self.v_last = v  # (the next passes write into the other of their two arrays)
         self.moved = []
         peak, rise, fall, through_up, through_dn = self.marks
         v0, v1 = v[:-1], v[1:]
@@ -1210,7 +1236,10 @@ class _Rounds:
         a[cand] = out
         self.moved.append(cand)
         off[cand] = out != acc[cand]
-        term[cand] = _pass_terms(out, self.holds.inner(cand))
+        terms = _pass_terms(out, self.holds.inner(cand))
+        term[cand] = terms
+        if self.finite and not np.isfinite(terms).all():
+            self.finite = False
         if rising:
             self.step_up = step
         else:
