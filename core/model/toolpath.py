@@ -467,6 +467,19 @@ class ToolPath:
         out[k - lo] = -g.unit(self._radial(points, k)) * kappa[:, None]
         return out
 
+    def _curvature_vector_at(self, points: NDArray[np.float64], k: NDArray[np.int64]) -> NDArray:
+        """Rows ``k`` (sorted moves) of :meth:`_curvature_vector` (the same numbers, for
+        those rows only)."""
+        out = np.zeros((k.size, 3))
+        a = self._arc
+        at = np.searchsorted(a["idx"], k)
+        arc = at < a["idx"].size
+        arc[arc] = a["idx"][at[arc]] == k[arc]
+        i = at[arc]
+        kappa = g.arc_curvature(a["radius"][i], a["pitch"][i])
+        out[arc] = -g.unit(self._radial(points, k[arc])) * kappa[:, None]
+        return out
+
     @cached_property
     def curvature_vector_start(self) -> NDArray[np.float64]:
         """(n, 3) curvature vector (kappa times principal normal) at each move's start, 1/mm."""
@@ -536,6 +549,21 @@ class ToolPath:
         """
         if self.n < 2:
             return np.zeros(0)
+        # Between two lines both vectors are zero, and so is the jump (sqrt(0)): where few
+        # junctions touch an arc, only those are computed (each row from its own two moves:
+        # the same numbers).
+        arcs = self._arc["idx"]
+        near = np.concatenate([arcs - 1, arcs])
+        near = np.unique(near[(near >= 0) & (near < self.n - 1)])
+        if 2 * near.size <= self.n - 1:
+            out = np.zeros(self.n - 1)
+            for b in pieces(near.size):
+                j = near[b]
+                out[j] = g.norm(
+                    self._curvature_vector_at(self.end, j)
+                    - self._curvature_vector_at(self.start, j + 1)
+                )
+            return out
         # In pieces, from the curvature vectors of each piece's moves only: no (n, 3)
         # columns of them (5M moves: 230 MB off the models' peak).
         return piecewise(
