@@ -101,7 +101,8 @@ def check_bytes(src: Source, content: str, verdict: str) -> None:
     names what an empty file lacks ("G-code"), ``verdict`` what the file is not ("a G-code
     program")."""
     buf = src.buf
-    if buf.size == 0 or not np.any(buf > SPACE):
+    # (a printable byte is most often in the first kB: the whole file only when not)
+    if buf.size == 0 or not (np.any(buf[:1024] > SPACE) or np.any(buf > SPACE)):
         raise InputError(f"empty file: no {content} in it", source=src.name)
     if b"\x00" in src.data:
         raise src.error(
@@ -109,7 +110,10 @@ def check_bytes(src: Source, content: str, verdict: str) -> None:
             f"binary file (NUL byte); not {verdict}",
             quote=False,
         )
-    lengths = src.ends - src.starts
+    # ends - starts, without the starts (0, then after each newline) kept for every line
+    lengths = src.ends.copy()
+    lengths[1:] -= src.nl[: src.n_lines - 1]
+    lengths[1:] -= 1
     long_ = np.flatnonzero(lengths > MAX_LINE)
     if long_.size:
         i = int(long_[0])

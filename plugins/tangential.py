@@ -223,7 +223,8 @@ def _corner_feed(
         v_acc = np.where(share_n > 0, np.sqrt(a_n * R / share_n), inf)
         v_jerk = np.where(share_t > 0, np.cbrt(machine.max_jerk * R**2 / share_t), inf)
     # inf jerk times a zero radius is NaN: no radius means a stop.
-    cand = np.nan_to_num(np.concatenate([v_feed, v_acc, v_jerk], axis=1), nan=0.0, posinf=inf)
+    cand = np.concatenate([v_feed, v_acc, v_jerk], axis=1)
+    np.nan_to_num(cand, copy=False, nan=0.0, posinf=inf)  # (in place: a new array)
     limit = np.argmin(cand, axis=1)
     return cand[np.arange(cand.shape[0]), limit], limit
 

@@ -282,9 +282,15 @@ class Strokes:
 def _cell_key(q: NDArray[np.int64], cell: int) -> NDArray[np.int64]:
     """One int64 per (x, y) cell of ``cell`` quantisation units."""
     # The plot is at most ~2e4 units high, far below 2**31: no collisions.
-    key = q[:, 0] // cell
+    # (Each column copied out first: the divisions on contiguous arrays, twice as fast.)
+    key = np.empty(q.shape[0], dtype=np.int64)
+    np.copyto(key, q[:, 0])
+    np.floor_divide(key, cell, out=key)
     key <<= 31
-    key += q[:, 1] // cell
+    low = np.empty(q.shape[0], dtype=np.int64)
+    np.copyto(low, q[:, 1])
+    np.floor_divide(low, cell, out=low)
+    key += low
     return key
 
 
@@ -399,12 +405,24 @@ def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
     frame = fit_frame(lo, hi, scale)
     # Plot px, then 0.1 px as int64, in place and in pieces: the same numbers as
     # frame.to_px, * Q, rint and astype over all points at once, with no (p, 2) copies.
+    # (Column by column through a small buffer: frame.to_px's operations in its order.)
     q = pts.view(np.int64)
-    for b in pieces(pts.shape[0]):
-        px = frame.to_px(pts[b])
-        px *= Q
-        np.rint(px, out=px)
-        q[b] = px.astype(np.int64)
+    size = min(pts.shape[0], PX_PIECE)
+    col = np.empty(size)
+    for b in pieces(pts.shape[0], PX_PIECE):
+        c = col[: b.stop - b.start]
+        for k in range(2):
+            if k == 0:  # x0 + (u - u_min) * scale
+                np.subtract(pts[b, 0], frame.u_min, out=c)
+                c *= frame.scale
+                np.add(frame.x0, c, out=c)
+            else:  # y0 + (v_max - v) * scale
+                np.subtract(frame.v_max, pts[b, 1], out=c)
+                c *= frame.scale
+                np.add(frame.y0, c, out=c)
+            c *= Q
+            np.rint(c, out=c)
+            q[b, k] = c  # (float to int64: astype's conversion)
     del pts
 
     breaks = np.ones(n, dtype=bool)
@@ -415,7 +433,7 @@ def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
         breaks[1:] |= qy[first[1:]] != qy[last[:-1]]
         del qx, qy
     # Drawn length of each move: its segments between first and last point.
-    seg = np.hypot(np.diff(q[:, 0]), np.diff(q[:, 1])) / Q if q.shape[0] > 1 else np.zeros(0)
+    seg = _hypot_ints(np.diff(q[:, 0]), np.diff(q[:, 1])) / Q if q.shape[0] > 1 else np.zeros(0)
     along = np.concatenate([[0.0], np.cumsum(seg)])
     del seg
     drawn = along[last] - along[first]
@@ -430,6 +448,31 @@ def strokes(tp: ToolPath, view: str, scale: float | None = None) -> Strokes:
     return Strokes(frame, q, first, last, breaks, drawn, new_cell, cell)
 
 
+#: Integer steps below this (in either coordinate) take their length from a table.
+HYPOT_TABLE = 256
+
+
+def _hypot_ints(dx: NDArray[np.int64], dy: NDArray[np.int64]) -> NDArray[np.float64]:
+    """np.hypot(dx, dy) of integer steps: the short ones (most, on a dense path) read from a
+    table of np.hypot's own values of |dx|, |dy| (hypot is even in each argument), the
+    others computed (the same numbers, several times faster than hypot throughout)."""
+    if not dx.size:
+        return np.zeros(0)
+    side = np.arange(HYPOT_TABLE)
+    table = np.hypot(side[:, None], side[None, :]).reshape(-1)
+    ax, ay = np.abs(dx), np.abs(dy)
+    longer = np.flatnonzero((ax >= HYPOT_TABLE) | (ay >= HYPOT_TABLE))
+    if longer.size:  # (their keys clipped into the table; their lengths computed below)
+        np.minimum(ax, HYPOT_TABLE - 1, out=ax)
+        np.minimum(ay, HYPOT_TABLE - 1, out=ay)
+    ax *= HYPOT_TABLE
+    ax += ay
+    out = np.take(table, ax)
+    if longer.size:
+        out[longer] = np.hypot(dx[longer], dy[longer])
+    return out
+
+
 def _new_cells(q: NDArray[np.int64], cell: int, out: NDArray[np.bool_]) -> None:
     """``out[i]`` for i >= 1: point i is in another cell (:func:`_cell_key`) than point
     i - 1. (In pieces: the same comparisons without the keys of every point at once; 5M
@@ -437,6 +480,10 @@ def _new_cells(q: NDArray[np.int64], cell: int, out: NDArray[np.bool_]) -> None:
     for b in pieces(q.shape[0] - 1):
         key = _cell_key(q[b.start : b.stop + 1], cell)
         np.not_equal(key[1:], key[:-1], out=out[b.start + 1 : b.stop + 1])
+
+
+#: Points per piece of :func:`strokes`' conversion to quantised px (in the cache).
+PX_PIECE = 1 << 14
 
 
 # ---------------------------------------------------------------- text output
@@ -489,16 +536,22 @@ def render_ints(values: ArrayLike, suffix: ArrayLike, table: Sequence[bytes]) ->
     # leading zeros land on the bytes before it (``width`` spare bytes before the first),
     # all of which a later write covers: its sign and the suffix before it are written after
     # the digits, and the digits of the value before it, of a lower j, after these.
+    # (Each digit is the quotient by its power of what the higher ones leave, taken off as
+    # it is written; in int32 where the values fit, faster than int64 and the same digits.)
     buf = np.empty(width + total, dtype=np.uint8)
     pos = start + neg
     pos += ndig  # (in buf: the place of 10**(width - 1))
+    left = av.astype(np.int32) if width < 10 else av.copy()
+    d = np.empty_like(left)
+    digit = np.empty(left.size, dtype=np.uint8)
     for p in powers.tolist():
-        d = av // p
-        d %= 10
-        d += ord("0")
-        buf[pos] = d
+        np.floor_divide(left, p, out=d)
+        np.add(d, ord("0"), out=digit, casting="unsafe")
+        buf[pos] = digit
+        d *= p
+        left -= d
         pos += 1
-    del pos
+    del pos, left, d, digit
     out = buf[width:]
     out[start[neg]] = ord("-")
 

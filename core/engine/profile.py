@@ -67,6 +67,13 @@ JERK_ROUNDS = 12
 JERK_CONVERGED = 1e-4
 #: Moves per piece of a round's elementwise work: its temporaries stay in the cache.
 CACHE_PIECE = 1 << 14
+#: A round finds the ramps again only around the moves whose marks changed when those are
+#: at most 1 / LOCAL_SHARE of the moves, and the ramps through them at most 1 / LOCAL_REACH
+#: (else over all of them: the same values).
+LOCAL_SHARE = 32
+LOCAL_REACH = 8
+#: Most moves a ramp chain's ends are searched at a time (from 2, doubling).
+CHAIN_WINDOW = 64
 
 
 def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
@@ -311,12 +318,21 @@ def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[ND
     jerk = np.broadcast_to(jerk, share.shape[1:])
     a = np.full(share.shape[0], np.inf)
     j = np.full(share.shape[0], np.inf)
-    with np.errstate(divide="ignore", invalid="ignore"):
+    # (in pieces, each column's quotient written where the axis moves into an array of inf:
+    # the values of np.where(moves, limit / col, inf), without its (n,) temporaries)
+    size = min(share.shape[0], CACHE_PIECE)
+    col, quot = np.empty(size), np.empty(size)
+    moves = np.empty(size, dtype=bool)
+    for s in pieces(share.shape[0], CACHE_PIECE):
+        m = s.stop - s.start
+        c, q, mv = col[:m], quot[:m], moves[:m]
         for k in range(share.shape[1]):
-            col = share[:, k]
-            moves = col > 0
-            np.minimum(a, np.where(moves, acc[k] / col, np.inf), out=a)
-            np.minimum(j, np.where(moves, jerk[k] / col, np.inf), out=j)
+            c[...] = share[s, k]
+            np.greater(c, 0, out=mv)
+            for limit, out in ((acc[k], a[s]), (jerk[k], j[s])):
+                q.fill(np.inf)
+                np.divide(limit, c, out=q, where=mv)
+                np.minimum(out, q, out=out)
     # A move with no direction (zero length, NaN) gets the lowest axis limits.
     a = np.where(np.isfinite(a), a, acc.min())
     j = np.where(np.isnan(j) | (np.isinf(j) & np.isfinite(jerk).all()), jerk.min(), j)
@@ -659,24 +675,37 @@ def _pass_terms(a: NDArray, inner: NDArray) -> NDArray:
 
 
 def _passes_of(
-    b2: NDArray, up: NDArray, dn: NDArray, work: tuple[NDArray, NDArray] | None = None
+    b2: NDArray,
+    up: NDArray,
+    dn: NDArray,
+    work: tuple[NDArray, NDArray] | None = None,
+    *,
+    out: NDArray | None = None,
+    finite: bool = False,
 ) -> NDArray:
     """:func:`_passes` from the squared caps ``b2`` and the :func:`_pass_terms` of both
     directions (the rounds of :func:`build_profile` keep the terms and renew only those of
     the moves whose acceleration changed). (Written with ``out=``: the same operations in
     the same order, without a temporary per step; ``work``: two (n + 1,) arrays to write
-    the sums and the backward pass into, which the rounds keep from pass to pass.)"""
+    the sums and the backward pass into, which the rounds keep from pass to pass; ``out``:
+    an (n + 1,) array for the speeds, else a new one.)
+
+    ``finite``: the caller knows ``b2`` and the terms to be finite. Then no sum or
+    difference the passes take the minima of is NaN (the sums of terms >= 0 may overflow
+    to inf, never to NaN) nor -0.0 (b2 >= +0, W >= +0), and fmin is minimum there, a
+    third faster."""
     n1 = b2.size
     w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
+    least = np.fmin if finite else np.minimum
     w[0] = 0.0
     np.cumsum(up, out=w[1:])
-    fwd = np.subtract(b2, w)
-    np.minimum.accumulate(fwd, out=fwd)
+    fwd = np.subtract(b2, w, out=out)
+    least.accumulate(fwd, out=fwd)
     fwd += w
     np.cumsum(dn, out=w[1:])
     np.add(b2, w, out=bwd)
     rev = bwd[::-1]
-    np.minimum.accumulate(rev, out=rev)
+    least.accumulate(rev, out=rev)
     bwd -= w
     np.minimum(fwd, bwd, out=fwd)
     np.minimum(fwd, b2, out=fwd)
@@ -876,6 +905,51 @@ def _ramp_changes(v0, peak, v1, marks, rising: bool) -> tuple[NDArray, NDArray, 
     return phase, dv, low
 
 
+def _denominator(a_up: NDArray, a_dn: NDArray) -> NDArray:
+    """1 / a_up + 1 / a_dn, the peak's denominator as :func:`_moves` makes it (made where
+    used, not kept through the rounds: 8 MB a million moves off the profile's peak)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        den = 1.0 / a_up
+        den += 1.0 / a_dn
+    return den
+
+
+def _marks_of(v0, v1, a_up, a_dn, den, between, cap) -> tuple[NDArray, ...]:
+    """The marks of :meth:`_Rounds._all_marks` of moves from their columns (gathered): the
+    peak, whether they accelerate and brake, and whether they accelerate through their end
+    and brake from their start (the same operations on every element as there)."""
+    with np.errstate(divide="ignore", invalid="ignore"):
+        pk = v0 * v0
+        pk /= a_up
+        li = np.multiply(between, 2.0)
+        pk += li
+        t = v1 * v1
+        t /= a_dn
+        pk += t
+        pk /= den
+        np.maximum(pk, 0.0, out=pk)
+        np.sqrt(pk, out=pk)
+        np.minimum(cap, pk, out=pk)
+        np.maximum(v0, v1, out=t)
+        np.maximum(pk, t, out=pk)
+        np.maximum(pk, 1.0, out=t)
+        t *= TOL.rel_equal
+        r = pk > v0 + t
+        f = pk > v1 + t
+        one = r != f
+        pk2 = pk * pk
+        up = pk2 - v0 * v0
+        up /= 2 * a_up
+        d_cr = between - up
+        up = pk2 - v1 * v1
+        up /= 2 * a_dn
+        d_cr -= up
+        np.maximum(d_cr, 0.0, out=d_cr)
+        flat = d_cr <= TOL.nil_distance
+    flat &= one
+    return pk, r, f, r & flat, f & flat
+
+
 class _Rounds:
     """The rounds of the jerk iteration of :func:`build_profile`, without the (n,) work a
     round's result does not need.
@@ -898,9 +972,6 @@ class _Rounds:
         self.a_up, self.a_dn = acc.copy(), acc.copy()
         self.term_up = _pass_terms(self.a_up, holds.inner())
         self.term_dn = self.term_up.copy()
-        with np.errstate(divide="ignore", invalid="ignore"):
-            self.den = 1.0 / self.a_up
-            self.den += 1.0 / self.a_dn
         n = acc.size
         self.step_up = np.zeros(n, dtype=np.int8)
         self.step_dn = np.zeros(n, dtype=np.int8)
@@ -912,15 +983,98 @@ class _Rounds:
         self.last_dn: tuple[NDArray, NDArray, NDArray] | None = None
         self.b2 = caps * caps
         self.work = (np.empty(caps.size), np.empty(caps.size))
+        self.spare: NDArray | None = None  # (see passes)
+        # the squared caps and the terms are finite (see _passes_of)
+        self.finite = bool(
+            np.isfinite(self.b2).all()
+            and np.isfinite(self.term_up).all()
+            and np.isfinite(self.term_dn).all()
+        )
+        # last round's marks (:meth:`step`): each move's peak, whether it accelerates or
+        # brakes, and through[k + 1] (move k links its ramp to the next or previous one),
+        # with the boundary speeds they were made from; None before the first round
+        self.marks: tuple[NDArray, NDArray, NDArray, NDArray, NDArray] | None = None
+        self.v_last = np.zeros(0)
+        # moves whose accelerations (and so the peak's denominator) the last round changed
+        self.moved: list[NDArray | slice] = []
+        # per direction (True: accelerating): the moves whose acceleration the damping kept
+        # off their target, and their targets
+        self.behind = {d: (np.zeros(0, dtype=np.intp), np.zeros(0)) for d in (True, False)}
 
     def passes(self) -> NDArray:
         """:func:`_passes` at the current accelerations (the squared caps and the passes'
-        work arrays made once for all the rounds)."""
-        return _passes_of(self.b2, self.term_up, self.term_dn, self.work)
+        work arrays made once for all the rounds). The speeds go into the older of two
+        arrays the rounds take turns with: the newer is the last round's (``v_last``),
+        the older no round reads any more."""
+        out = self.spare
+        self.spare = self.v_last if self.v_last.size else None
+        return _passes_of(
+            self.b2, self.term_up, self.term_dn, self.work, out=out, finite=self.finite
+        )
 
     def step(self, v: NDArray) -> float:
         """One round from the boundary speeds ``v``: the accelerations of the next (in
-        place); returns the largest relative change, as :func:`build_profile` measures it."""
+        place); returns the largest relative change, as :func:`build_profile` measures it.
+
+        The marks (peak, accelerating, braking, through) of a move depend on its boundary
+        speeds, its accelerations and its fixed columns only: after the first round they
+        are made again only where one of those changed (a few moves in a thousand once the
+        speeds settle), the same arithmetic on the same numbers."""
+        near = None
+        if self.marks is None:
+            self.marks = self._all_marks(v)
+        else:
+            near = self._update_marks(v)
+        self.v_last = v  # (the next passes write into the other of their two arrays)
+        self.moved = []
+        peak, rise, fall, through_up, through_dn = self.marks
+        v0, v1 = v[:-1], v[1:]
+        change_up = self._direction(True, rise, through_up, v0, v1, peak, near)
+        change_dn = self._direction(False, fall, through_dn, v0, v1, peak, near)
+        return max(change_up, change_dn)
+
+    def _update_marks(self, v: NDArray) -> NDArray | None:
+        """The marks of :meth:`_all_marks` made again where a move's boundary speeds or
+        accelerations changed since the last round (in place); returns those moves (None:
+        all of them were made again)."""
+        assert self.marks is not None
+        peak, rise, fall, through_up, through_dn = self.marks
+        n = peak.size
+        changed = v != self.v_last
+        dirty = changed[:-1]
+        dirty |= changed[1:]
+        del changed
+        for k in self.moved:
+            dirty[k] = True
+        at = np.flatnonzero(dirty)
+        del dirty
+        if at.size == 0:
+            return at
+        if 2 * at.size > n:
+            self.marks = self._all_marks(v)
+            return None
+        for s in pieces(at.size, CACHE_PIECE):  # (elementwise: bounded temporaries)
+            k = at[s]
+            pk, r, f, t_up, t_dn = _marks_of(
+                v[k],
+                v[k + 1],
+                self.a_up[k],
+                self.a_dn[k],
+                _denominator(self.a_up[k], self.a_dn[k]),
+                self.holds.between[k],
+                self.cap[k],
+            )
+            peak[k] = pk
+            rise[k] = r
+            fall[k] = f
+            k = k + 1  # (a new array: ``at`` is returned)
+            through_up[k] = t_up
+            through_dn[k] = t_dn
+        return at
+
+    def _all_marks(self, v: NDArray) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray]:
+        """The marks of every move from the boundary speeds ``v`` (:func:`_marks_of`, in
+        pieces, their temporaries in the cache)."""
         a_up, a_dn = self.a_up, self.a_dn
         between = self.holds.between
         n = a_up.size
@@ -947,7 +1101,10 @@ class _Rounds:
                 pk += li
                 np.divide(q[1:], a_dn[s], out=t)
                 pk += t
-                pk /= self.den[s]
+                np.divide(1.0, a_up[s], out=li)
+                np.divide(1.0, a_dn[s], out=t)
+                li += t
+                pk /= li  # (the peak's denominator, as _moves makes it)
                 np.maximum(pk, 0.0, out=pk)
                 np.sqrt(pk, out=pk)
                 np.minimum(self.cap[s], pk, out=pk)
@@ -980,11 +1137,7 @@ class _Rounds:
                 at = x + (s.start + 1)
                 through_up[at] = r[x] & flat
                 through_dn[at] = f[x] & flat
-        del sq, tmp, lim, one
-        v0, v1 = v[:-1], v[1:]
-        change_up = self._direction(True, rise, through_up, v0, v1, peak)
-        change_dn = self._direction(False, fall, through_dn, v0, v1, peak)
-        return max(change_up, change_dn)
+        return peak, rise, fall, through_up, through_dn
 
     def _effective(self, rising: bool, idx: NDArray, dv: NDArray, at: NDArray | slice) -> NDArray:
         """:func:`effective_acceleration` of the moves ``idx`` in ramps of speed change
@@ -1042,19 +1195,62 @@ class _Rounds:
         hi -= lo  # the speed changes (in place: one (n,) array fewer at the profile's peak)
         return hi if chain is None else hi[chain]
 
-    def _direction(self, rising, phase, through, v0, v1, peak) -> float:
-        """The next accelerations of one direction (updated in place, with the passes' terms
-        and the peak's denominator); returns the largest relative change.
+    def _direction(self, rising, phase, through, v0, v1, peak, near) -> float:
+        """The next accelerations of one direction (updated in place, with the passes'
+        terms); returns the largest relative change.
 
         :func:`_ramp_changes` on the moves in a ramp phase gives each the speed change of
         its ramp, hence its effective acceleration (``acc`` elsewhere); where a move's
         A_eff turns back against its last step, the geometric mean of the old and the new
         (the damping). Both only where a ramp phase is or the acceleration is not
-        ``acc``: elsewhere the new one is the old one."""
+        ``acc``: elsewhere the new one is the old one. ``near``: the moves whose marks
+        changed since the last round (None: all may have), whose ramps alone need to be
+        found again (:meth:`_local`)."""
         if rising:
             a, last, term = self.a_up, self.step_up, self.term_up
         else:
             a, last, term = self.a_dn, self.step_dn, self.term_dn
+        acc = self.acc
+        off = self.off_up if rising else self.off_dn
+        found = None if near is None else self._local(rising, near, v0, v1, peak)
+        cand: NDArray | slice
+        if found is None:
+            cand, new, old = self._everywhere(rising, phase, through, v0, v1, peak)
+        else:
+            cand, new, old = found
+        del found
+        out, step, change = _damped(new, old, last, cand)
+        # the moves whose new acceleration is still not their target (the damping held it
+        # back), with their targets: the next round's candidates beside the changed ramps
+        behind = out != new
+        at_behind = np.flatnonzero(behind) if isinstance(cand, slice) else cand[behind]
+        self.behind[rising] = (at_behind, new[behind])
+        del behind, at_behind
+        # the terms follow where the acceleration changed
+        moved = out != old
+        del new, old
+        if not moved.all():
+            cand = np.flatnonzero(moved) if isinstance(cand, slice) else cand[moved]
+            out = out[moved]
+        del moved
+        a[cand] = out
+        self.moved.append(cand)
+        off[cand] = out != acc[cand]
+        terms = _pass_terms(out, self.holds.inner(cand))
+        term[cand] = terms
+        if self.finite and not np.isfinite(terms).all():
+            self.finite = False
+        if rising:
+            self.step_up = step
+        else:
+            self.step_dn = step
+        return change
+
+    def _everywhere(self, rising, phase, through, v0, v1, peak):
+        """The candidates of :meth:`_direction` over all the moves: where the target (the
+        ramp's A_eff in a ramp phase, ``acc`` elsewhere) is not the current acceleration;
+        (moves or a slice of all, their targets, their current accelerations)."""
+        a = self.a_up if rising else self.a_dn
         acc = self.acc
         idx = np.flatnonzero(phase)
         # every move in a ramp (1M arcs): the whole columns, not gathered copies
@@ -1085,36 +1281,103 @@ class _Rounds:
         old_in = a[at]
         differ = eff != old_in
         rest = np.flatnonzero(off & ~phase)
-        cand: NDArray | slice
         if rest.size:
-            cand = np.concatenate([idx[differ], rest])
-            new = np.concatenate([eff[differ], acc[rest]])
-            old = np.concatenate([old_in[differ], a[rest]])
-        elif differ.all():  # every move in a ramp changes (arcs: the first rounds)
-            cand, new, old = at, eff, old_in
-        else:
-            cand, new, old = idx[differ], eff[differ], old_in[differ]
-        del idx, eff, old_in, differ, rest
-        out, step, change = _damped(new, old, last, cand)
-        # the terms and the denominator follow where the acceleration changed
-        moved = out != old
-        del new, old
-        if not moved.all():
-            cand = np.flatnonzero(moved) if isinstance(cand, slice) else cand[moved]
-            out = out[moved]
-        del moved
-        a[cand] = out
-        off[cand] = out != acc[cand]
-        term[cand] = _pass_terms(out, self.holds.inner(cand))
-        with np.errstate(divide="ignore", invalid="ignore"):
-            den = 1.0 / self.a_up[cand]
-            den += 1.0 / self.a_dn[cand]
-        self.den[cand] = den
+            return (
+                np.concatenate([idx[differ], rest]),
+                np.concatenate([eff[differ], acc[rest]]),
+                np.concatenate([old_in[differ], a[rest]]),
+            )
+        if differ.all():  # every move in a ramp changes (arcs: the first rounds)
+            return at, eff, old_in
+        return idx[differ], eff[differ], old_in[differ]
+
+    def _links(self, rising: bool, m: NDArray) -> NDArray:
+        """Whether each move ``m`` (any ints; outside 1..n-1: no) continues the ramp chain
+        of the move before (:meth:`_everywhere`'s ``cont``)."""
+        assert self.marks is not None
+        _, rise, fall, through_up, through_dn = self.marks
+        n = rise.size
+        if n < 2:
+            return np.zeros(m.shape, dtype=bool)
+        k = np.clip(m, 1, n - 1)
         if rising:
-            self.step_up = step
+            out = rise[k] & through_up[k]
         else:
-            self.step_dn = step
-        return change
+            out = fall[k] & through_dn[k + 1] & fall[k - 1]
+        out &= (m >= 1) & (m < n)
+        return out
+
+    def _chain_ends(self, rising: bool, seeds: NDArray) -> tuple[NDArray, NDArray]:
+        """The first and last move of the ramp chain of each of ``seeds`` (moves in a ramp
+        phase), searched a few moves at a time (at most CHAIN_WINDOW)."""
+        ends = []
+        for back in (True, False):
+            # back to the move that does not continue the one before, or on to the next
+            at = seeds.copy() if back else seeds + 1
+            todo = np.arange(seeds.size)
+            width = 2
+            while todo.size:
+                w = -np.arange(width) if back else np.arange(width)
+                m = at[todo, None] + w
+                stop = ~self._links(rising, m)
+                found = stop.any(axis=1)
+                at[todo[found]] = m[found, stop[found].argmax(axis=1)]
+                todo = todo[~found]
+                at[todo] += -width if back else width
+                width = min(2 * width, CHAIN_WINDOW)
+            ends.append(at)
+        return ends[0], ends[1] - 1
+
+    def _local(self, rising, near, v0, v1, peak):
+        """:meth:`_everywhere`'s candidates where the marks changed at the moves ``near``
+        only: a ramp chain none of whose moves, nor the moves beside it, changed its marks
+        is the same chain with the same speeds, hence the same targets, so only the chains
+        around ``near`` are found again (their moves' targets made as there), and the
+        moves the damping held back keep theirs. None where that is not worth it (many
+        moves changed)."""
+        assert self.marks is not None
+        n = v0.size
+        if LOCAL_SHARE * near.size > n:
+            return None
+        a = self.a_up if rising else self.a_dn
+        phase = self.marks[1] if rising else self.marks[2]
+        through = self.marks[3] if rising else self.marks[4]
+        seeds = np.concatenate([near - 1, near, near + 1])
+        seeds.sort()
+        seeds = seeds[(seeds >= 0) & (seeds < n)]
+        if seeds.size:
+            seeds = seeds[np.concatenate([[True], seeds[1:] != seeds[:-1]])]
+        in_ramp = phase[seeds]
+        alone = seeds[~in_ramp]
+        first, last = self._chain_ends(rising, seeds[in_ramp])
+        if first.size:  # (sorted: the seeds are) one of each chain
+            keep = np.concatenate([[True], first[1:] != first[:-1]])
+            first, last = first[keep], last[keep]
+        size = last - first + 1
+        if LOCAL_REACH * (int(size.sum()) + alone.size) > n:
+            return None
+        # the ramps' speed changes, as _ramp_dv makes them
+        if rising:
+            lo = v0[first]
+            dv = np.where(through[last + 1], v1[last], peak[last])
+        else:
+            dv = np.where(through[first + 1], v0[first], peak[first])
+            lo = v1[last]
+        dv -= lo
+        ends = np.cumsum(size)
+        total = int(ends[-1]) if size.size else 0
+        moves = np.repeat(first - (ends - size), size) + np.arange(total)
+        eff = effective_acceleration(np.repeat(dv, size), self.acc[moves], self.jerk[moves])
+        found = np.concatenate([moves, alone])
+        target = np.concatenate([eff, self.acc[alone]])
+        del moves, eff
+        behind, wanted = self.behind[rising]
+        kept = ~np.isin(behind, found)
+        cand = np.concatenate([behind[kept], found])
+        new = np.concatenate([wanted[kept], target])
+        old = a[cand]
+        differ = new != old
+        return cand[differ], new[differ], old[differ]
 
 
 def _damped(

@@ -82,10 +82,24 @@ def max_share(a: ArrayLike, b: ArrayLike, sweep: ArrayLike) -> NDArray[np.float6
     a = np.asarray(a, dtype=np.float64)
     b = np.asarray(b, dtype=np.float64)
     sweep = np.asarray(sweep, dtype=np.float64)
-    peak = np.hypot(a, b)
-    phi_peak = np.mod(np.arctan2(b, a), np.pi)
-    at_end = np.maximum(np.abs(a), np.abs(a * np.cos(sweep) + b * np.sin(sweep)))
-    return np.where(phi_peak <= sweep, peak, at_end)
+    if not np.broadcast_shapes(a.shape, b.shape, sweep.shape):  # scalars: as one-element rows
+        return max_share(a.reshape(1), b.reshape(1), sweep.reshape(1)).reshape(())
+    # phi0 mod pi: atan2 is in [-pi, pi], where np.mod(phi, pi) is phi + pi below 0 (fmod
+    # leaves phi as it is; one rounded addition), 0 at pi and phi elsewhere -- its values,
+    # several times faster
+    phi = np.arctan2(b, a)
+    below = phi < 0
+    phi[phi == np.pi] = 0.0
+    np.add(phi, np.pi, out=phi, where=below)
+    inside = phi <= sweep
+    del phi, below
+    out = np.maximum(np.abs(a), np.abs(a * np.cos(sweep) + b * np.sin(sweep)))
+    # the peak sqrt(a^2 + b^2) only where it is the answer
+    k = np.nonzero(inside)
+    if k[0].size:
+        a, b = np.broadcast_arrays(a, b, sweep)[:2]
+        out[k] = np.hypot(a[k], b[k])
+    return out
 
 
 def radial(

@@ -18,6 +18,9 @@ from core.model.errors import InputError
 #: Largest input file read: 1 GiB. A 5,000,000-block finishing program is about 150 MB; a
 #: day of 1 ms trace samples about 2 GB of CSV -- recordings that long are cut by the user.
 MAX_INPUT_BYTES = 1 << 30
+#: Bytes read at a time: a file of up to this size is one read, its bytes taken as they
+#: come (b"".join of one chunk is that chunk: no copy).
+READ_CHUNK = 1 << 28
 
 _KINDS = (
     (stat.S_ISDIR, "a folder"),
@@ -59,7 +62,7 @@ def read_input(
         want = st.st_size if limit is None else min(limit, st.st_size)
         chunks, got = [], 0
         while got < want:
-            b = os.read(fd, min(want - got, 1 << 24))
+            b = os.read(fd, min(want - got, READ_CHUNK))
             if not b:
                 break  # the file shrank while being read
             chunks.append(b)

@@ -412,8 +412,12 @@ class ToolPath:
         out[a["idx"]] = g.arc_length(a["radius"], self.sweep[a["idx"]], a["pitch"])
         return out
 
-    def _arc_tangents(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
-        out = g.unit(self.end - self.start)
+    def _arc_tangents(self, points: NDArray[np.float64], other: str) -> NDArray[np.float64]:
+        """Unit tangents at ``points`` (the moves' starts or ends): the chord's on lines,
+        copied from the ``other`` end's where those are made (the same rows), and the
+        arcs' own."""
+        made = self.__dict__.get(other)
+        out = made.copy() if made is not None else g.unit(self.end - self.start)
         a = self._arc
         for b in pieces(a["idx"].size):
             k = a["idx"][b]
@@ -425,12 +429,12 @@ class ToolPath:
     @cached_property
     def tangent_start(self) -> NDArray[np.float64]:
         """(n, 3) unit tangent at the start of each move."""
-        return self._arc_tangents(self.start)
+        return self._arc_tangents(self.start, "tangent_end")
 
     @cached_property
     def tangent_end(self) -> NDArray[np.float64]:
         """(n, 3) unit tangent at the end of each move."""
-        return self._arc_tangents(self.end)
+        return self._arc_tangents(self.end, "tangent_start")
 
     @cached_property
     def curvature(self) -> NDArray[np.float64]:
@@ -461,6 +465,19 @@ class ToolPath:
         k = a["idx"][i0:i1]
         kappa = g.arc_curvature(a["radius"][i0:i1], a["pitch"][i0:i1])
         out[k - lo] = -g.unit(self._radial(points, k)) * kappa[:, None]
+        return out
+
+    def _curvature_vector_at(self, points: NDArray[np.float64], k: NDArray[np.int64]) -> NDArray:
+        """Rows ``k`` (sorted moves) of :meth:`_curvature_vector` (the same numbers, for
+        those rows only)."""
+        out = np.zeros((k.size, 3))
+        a = self._arc
+        at = np.searchsorted(a["idx"], k)
+        arc = at < a["idx"].size
+        arc[arc] = a["idx"][at[arc]] == k[arc]
+        i = at[arc]
+        kappa = g.arc_curvature(a["radius"][i], a["pitch"][i])
+        out[arc] = -g.unit(self._radial(points, k[arc])) * kappa[:, None]
         return out
 
     @cached_property
@@ -532,6 +549,21 @@ class ToolPath:
         """
         if self.n < 2:
             return np.zeros(0)
+        # Between two lines both vectors are zero, and so is the jump (sqrt(0)): where few
+        # junctions touch an arc, only those are computed (each row from its own two moves:
+        # the same numbers).
+        arcs = self._arc["idx"]
+        near = np.concatenate([arcs - 1, arcs])
+        near = np.unique(near[(near >= 0) & (near < self.n - 1)])
+        if 2 * near.size <= self.n - 1:
+            out = np.zeros(self.n - 1)
+            for b in pieces(near.size):
+                j = near[b]
+                out[j] = g.norm(
+                    self._curvature_vector_at(self.end, j)
+                    - self._curvature_vector_at(self.start, j + 1)
+                )
+            return out
         # In pieces, from the curvature vectors of each piece's moves only: no (n, 3)
         # columns of them (5M moves: 230 MB off the models' peak).
         return piecewise(

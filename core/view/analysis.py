@@ -53,7 +53,10 @@ def at_feed_share(profile: Profile, fraction: float = 0.9) -> float:
     length = tp.length
 
     def fast(s: slice) -> NDArray[np.float64]:  # the feed length run at fraction F or more
-        f = feed[s]
+        k = feed[s]
+        f: NDArray[np.int64] | slice = k
+        if k[-1] - k[0] + 1 == k.size:  # (a run of moves: read as a slice, not gathered)
+            f = slice(int(k[0]), int(k[-1]) + 1)
         thr = fraction * tp.feed[f]
         v0, v1, vp = profile.v_entry[f], profile.v_exit[f], profile.v_peak[f]
         up = np.maximum((thr**2 - v0**2) / (2 * profile.a_up[f]), 0.0)
