@@ -544,6 +544,16 @@ def test_heidenhain_klartext_is_refused_with_one_line():
     fails("0 BEGIN PGM 1 MM\n1 L X+10 R0 FMAX\n2 END PGM 1 MM\n", 1, "Heidenhain", "part.h")
 
 
+def test_a_heidenhain_header_indented_or_numbered_is_found_and_blank_lines_do_not_stall():
+    """The Klartext header with blanks or a block number before it, and a file of 2000 empty
+    lines and 5000 blanks (the old pattern, blanks on both sides of an optional number,
+    backtracked about 285 s on it): the header is found; the blanks are an empty program."""
+    fails("\n  12 BEGIN PGM 1 MM\n", 2, "Heidenhain", "part.h")
+    fails("\t BEGIN PGM 1 MM\n", 1, "Heidenhain", "part.h")
+    with pytest.raises(InputError, match="empty"):
+        read("\n" * 2000 + " " * 5000, "blank.nc")
+
+
 def test_free_text_after_the_program_end_is_not_read():
     """Nothing after M30 runs, so text there (even non-ASCII) refuses nothing."""
     tp = read("G21 G1 X1 F60\nM30\nthis is free text \u00e9 #[\n")
