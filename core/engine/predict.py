@@ -197,15 +197,22 @@ TIME_DOMAIN = frozenset({"servo_tau", "filter_window"})
 
 
 def _same(a: object, b: object) -> bool:
-    """Whether two setup values are certainly the same: one object, or equal numbers of
-    one type and sign (tuples element by element)."""
+    """Whether two setup or evaluation values are certainly the same: one object, equal
+    numbers of one type and sign, equal strings, arrays of one dtype and shape with the same
+    bytes (NaNs and signed zeros included), tuples element by element."""
     if a is b:
         return True
     if isinstance(a, tuple) and isinstance(b, tuple):
         return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
+    if isinstance(a, np.ndarray) and isinstance(b, np.ndarray):
+        if a.dtype != b.dtype or a.shape != b.shape:
+            return False
+        x = np.ascontiguousarray(a).reshape(-1).view(np.uint8)
+        y = np.ascontiguousarray(b).reshape(-1).view(np.uint8)
+        return bool(np.array_equal(x, y))
     if type(a) is type(b) and type(a) in (int, float, bool):
         return bool(a == b) and math.copysign(1.0, a) == math.copysign(1.0, b)  # type: ignore[arg-type]
-    return False
+    return type(a) is type(b) is str and a == b
 
 
 def same_plan(a: Setup, b: Setup) -> bool:
@@ -231,32 +238,13 @@ def retimed(pred: Prediction, setup: Setup) -> Prediction:
     )
 
 
-def _same_bits(a: object, b: object) -> bool:
-    """Whether two evaluation fields are certainly the same input: one object, None both,
-    equal tuples, or arrays of one dtype and shape with the same bytes (NaNs and signed
-    zeros included)."""
-    if a is b:
-        return True
-    if a is None or b is None:
-        return False
-    if isinstance(a, tuple) and isinstance(b, tuple):
-        return a == b
-    if isinstance(a, np.ndarray) and isinstance(b, np.ndarray):
-        if a.dtype != b.dtype or a.shape != b.shape:
-            return False
-        x = np.ascontiguousarray(a).reshape(-1).view(np.uint8)
-        y = np.ascontiguousarray(b).reshape(-1).view(np.uint8)
-        return bool(np.array_equal(x, y))
-    return False
-
-
 def same_evaluation(a: Evaluation, b: Evaluation) -> bool:
     """Whether two evaluations are the same input to :func:`build_profile`: one tool path
     and one machine (the same objects) and every other field bit for bit the same."""
     if a.toolpath is not b.toolpath or a.machine is not b.machine:
         return False
     return all(
-        _same_bits(getattr(a, f.name), getattr(b, f.name))
+        _same(getattr(a, f.name), getattr(b, f.name))
         for f in dataclasses.fields(a)
         if f.name not in ("toolpath", "machine")
     )
