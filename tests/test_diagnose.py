@@ -443,7 +443,8 @@ def test_a_fit_at_its_bound_warns_that_the_machine_file_is_wrong(nc):
 
 def test_a_fit_inside_its_bounds_has_no_warning(nc):
     """An override of 0.8, inside 0.5-1.5: named, and no warning."""
-    from core.cli.diagnosis_report import at_bound, report
+    from core.cli.diagnosis_report import report
+    from core.diagnosis.fit import at_bound
 
     d, _, effects = _override_diagnosis(nc, 0.8)
     text = report(d, program="p.ngc", machine="m", labels=["run1.csv"], effects=effects)

@@ -10,7 +10,7 @@ import math
 from collections.abc import Mapping
 
 from core.diagnosis.diagnose import Diagnosis
-from core.diagnosis.fit import at_bound
+from core.diagnosis.fit import bounded
 from core.diagnosis.gaps import GapZone
 from core.diagnosis.rules import ADD_SHARE, BEST_SHARE, GAP_SHARE, SIG_P, STOP_SHARE
 from core.engine.effects import Effect
@@ -43,14 +43,12 @@ def warnings(d: Diagnosis, effects: Mapping[str, Effect], labels: list[str]) -> 
         if eff is None:
             continue
         values = d.chosen_params.get(name, fitted.get(name, {}))
-        machine = d.befores[0].setup.machine
-        for p in eff.params:
-            if p.name in values and at_bound(p, values[p.name], p.default_for(machine)):
-                unit = f" {p.unit}" if p.unit else ""
-                out.append(
-                    f"{name} fitted {p.name}={values[p.name]:.4g}{unit}, at its bound "
-                    f"({p.low:g} to {p.high:g}{unit}): the effect is stretched to its limit"
-                )
+        for p in bounded(eff, values, d.befores[0].setup.machine):
+            unit = f" {p.unit}" if p.unit else ""
+            out.append(
+                f"{name} fitted {p.name}={values[p.name]:.4g}{unit}, at its bound "
+                f"({p.low:g} to {p.high:g}{unit}): the effect is stretched to its limit"
+            )
     if out:
         out.append(
             "the machine file may not describe this machine: run ncperf calibrate on recordings "

@@ -41,7 +41,7 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.diagnosis.align import Alignment
-from core.diagnosis.fit import at_bound, fit, predict_all
+from core.diagnosis.fit import bounded, fit, predict_all
 from core.diagnosis.gaps import GapZone, gap_zones
 from core.diagnosis.objective import FEED, Objective
 from core.diagnosis.resample import (
@@ -246,13 +246,7 @@ def diagnose_cases(
     )
     # effects whose fit ran to a bound of a parameter: stretched to cover for something else
     stretched = frozenset(
-        r.name
-        for r in results
-        if any(
-            at_bound(p, r.params[p.name], p.default_for(base.machine))
-            for p in effects[r.name].params
-            if p.name in r.params
-        )
+        r.name for r in results if bounded(effects[r.name], r.params, base.machine)
     )
     results, best, reason = decide(results, floor, folded, stretched)
 
@@ -460,24 +454,23 @@ def decide(
             and sign_flip_p(r.chunk_sq, lead.chunk_sq) > TIE_P
         )
     ]
-    # the rapids, which no fit saw, decide between effects equal on the feed moves where they
-    # tell them apart: a path speed limit or an axis's speed slows the rapids too, a feed
-    # override does not (LinuxCNC 2.9 scales rapids by its rapid override only)
-    # Where they tell effects apart they also weigh those a significance test put behind the
-    # best by less than the floor (score6's spiral_pocket_60151: a 40 mm/s path limit left
-    # 6.8 mm/min, an axis-speed fit moving five parameters 6.3 -- not equal by the test --,
-    # but 22 against 965 mm/min on the rapids).
+    # The rapids, which no fit saw, decide where they tell effects apart: a path speed limit
+    # or an axis's speed slows the rapids too, a feed override does not (LinuxCNC 2.9 scales
+    # rapids by its rapid override only). They weigh the equals and those a significance
+    # test put behind the best by less than the floor (score6's spiral_pocket_60151: a
+    # 40 mm/s path limit left 6.8 mm/min, an axis-speed fit moving five parameters 6.3 --
+    # not equal by the test --, but 22 against 965 mm/min on the rapids).
     near = [r for r in ok if r.held_out_gap_after - lead.held_out_gap_after < floor]
     pool = equal + [r for r in near if r not in equal]
-    by_rapids = equal
+    by_rapids, slower = equal, []
     if len(pool) > 1 and all(math.isfinite(r.rapid_gap) for r in pool):
         least = min(r.rapid_gap for r in pool)
         # (rapids are modelled less closely than feed moves -- 330 mm/min on an unchanged
         # 2.5D part's drilling cycles --: only twice the least, and the floor more, counts)
         margin_r = max(floor, least)
-        fit_rapids = [r for r in pool if r.rapid_gap - least <= margin_r]
-        if len(fit_rapids) < len(pool):
-            by_rapids = fit_rapids
+        slower = [r for r in pool if r.rapid_gap - least > margin_r]
+        if slower:
+            by_rapids = [r for r in pool if r not in slower]
     order = {name: k for k, name in enumerate(EFFECT_PRIORITY)}
     # an effect the machine file already calibrates (``folded``) is the less likely story;
     # an effect that explains anything was at least switched on: one decision even where
@@ -498,7 +491,6 @@ def decide(
         f"{best.name}: removes {best.removed:.0%} of the held-out gap (p = {best.p:.2g}, "
         f"floor {floor:.1f} mm/min)"
     )
-    slower = [r for r in pool if r not in by_rapids] if by_rapids is not equal else []
     same = [r.name for r in by_rapids if r is not best]
     if slower:
         reason += (

@@ -8,7 +8,7 @@ those that minimise the gap on the calibration data: the RMS gap over time of th
 from __future__ import annotations
 
 import math
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
 import numpy as np
@@ -247,6 +247,17 @@ def at_bound(p: Param, value: float, default: float | None = None) -> bool:
         at_low &= pos(default) > AT_BOUND
         at_high &= pos(default) < 1.0 - AT_BOUND
     return bool(at_low or at_high)
+
+
+def bounded(eff: Effect, values: Mapping[str, float], machine: Machine) -> list[Param]:
+    """The parameters of ``eff`` whose fitted ``values`` sit at a bound (:func:`at_bound`,
+    a bound that is the parameter's default on ``machine`` not counted): the effect was
+    stretched to its limit."""
+    return [
+        p
+        for p in eff.params
+        if p.name in values and at_bound(p, values[p.name], p.default_for(machine))
+    ]
 
 
 def _key(eff: Effect, values: dict[str, float]) -> tuple[float, ...]:
