@@ -44,7 +44,15 @@ differently in five ways the profile feels:
 * a junction whose direction change at the segments' speed v over one servo period T needs
   little acceleration -- a = (v / T + A) |t2 - t1|_k / A_k below ``ARC_BLEND_KINK_RATIO``
   = 0.1 on every axis k, twice that share next to a programmed arc -- is run through as
-  tangent, without an arc (``tpSetupTangent``): no hold, no corner limit;
+  tangent, without an arc (``tpSetupTangent``): no hold, no corner limit. v is the slower
+  segment's speed limit as the test sees it, a short segment's clamped to its length over
+  ONE servo period (``tcClampVelocityByLength`` when the line is added), not over the
+  1.02 periods the motion later keeps (``TP_MIN_SEGMENT_CYCLES``): on 0.05 mm chords that
+  is 2 % more speed, enough to turn the 2-quantum direction changes of 4-decimal
+  coordinates (kink 0.0995) into corners, as the traces show (drawn8's freeform_81003 on
+  the unchanged machine: 223 -> 38 mm/min). (A kink's speed, v kink_ratio / kink, below,
+  keeps the segments' speeds over 1.02 periods: with the test's v that trace's gap is
+  233 mm/min.)
 * the arc's tangent length is at most half of each block and what the tolerance allows,
   d = min(l1 / 2, l2 / 2, sin(b/2) TIT / (1 - cos(b/2))), its radius R = d cot(b/2), its
   speed v_plan the lower of sqrt(a_n R) and the faster segment's feed; but the arc is only
@@ -248,6 +256,7 @@ def linuxcnc_blends(
     machine: Machine,
     caps: tuple[NDArray, NDArray],
     geometry: tuple[NDArray, NDArray, NDArray],
+    kink_caps: tuple[NDArray, NDArray],
 ) -> tuple[NDArray, NDArray, NDArray, NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's corners (module docstring): the radius that limits the corner speed,
     the arc's radius as inserted (R_plan; 0 where the junction is run as tangent), whether
@@ -255,7 +264,8 @@ def linuxcnc_blends(
     the axis that sets it, and the kink: the largest axis share of the acceleration turning
     at speed in one servo period needs (tangent below LCNC_KINK_RATIO). ``caps``: the two
     segments' top speeds (:func:`segment_caps`); ``geometry``: the direction change the arc
-    is laid for and its reach before and after (:func:`arc_blend_geometry`)."""
+    is laid for and its reach before and after (:func:`arc_blend_geometry`); ``kink_caps``:
+    the segments' top speeds the kink test sees (their lengths over one servo period)."""
     t1, t2 = _rows(tp.tangent_end, j), _rows(tp.tangent_start, j + 1)
     acc = machine.max_acceleration
     a_plane, axis = plane_acceleration(t1, t2, acc)
@@ -274,7 +284,7 @@ def linuxcnc_blends(
         s_blend = np.fmin(np.sqrt(2.0 * a_par * d_geom), v_plan) / a_par * v_plan
         r_plan = np.fmin(np.fmax(v_plan * v_plan / a_n, np.fmin(s_blend / phi, r_geom)), r_geom)
         # tangent kinks: the acceleration of turning at full speed within one servo period
-        a_inst = np.fmin(cap_p, cap_n) / servo + a_plane
+        a_inst = np.fmin(*kink_caps) / servo + a_plane
         kink = np.max(np.abs(t2 - t1) * (a_inst[:, None] / acc[None, :]), axis=1)
     kink = np.where(tp.is_arc[j] | tp.is_arc[j + 1], kink / LCNC_TANGENTIAL_RATIO, kink)
     tangent = kink < LCNC_KINK_RATIO
@@ -353,14 +363,18 @@ def linuxcnc_choice(
     return mode, speed, share
 
 
-def segment_caps(tp: ToolPath, j: NDArray[np.int64], machine: Machine) -> tuple[NDArray, NDArray]:
+def segment_caps(
+    tp: ToolPath, j: NDArray[np.int64], machine: Machine, block_time: float | None = None
+) -> tuple[NDArray, NDArray]:
     """The top speed of the segments before and after junctions ``j`` (tcGetMaxTargetVel):
     the programmed feed within min_k Vmax_k / share_k and the path speed limit (a program's
-    F above the machine's runs at the machine's), and the length over one block time."""
+    F above the machine's runs at the machine's), and the length over one block time
+    (``block_time``, s; default the machine's)."""
     k = np.concatenate([j, j + 1])
     v = lowest_axis(tp.axis_share, k, np.asarray(machine.max_feed, dtype=np.float64))[0]
     top = np.fmin(np.fmin(tp.feed[k], v), machine.max_path_feed)
-    top = np.fmin(top, tp.length[k] / machine.interpolation_time)
+    t_block = machine.interpolation_time if block_time is None else block_time
+    top = np.fmin(top, tp.length[k] / t_block)
     return top[: j.size], top[j.size :]
 
 
@@ -488,9 +502,11 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     phi = beta
     if machine.corner_blending == "linuxcnc":
         caps = segment_caps(tp, j, machine)
+        servo = machine.interpolation_time / LCNC_MIN_SEGMENT_CYCLES
+        kink_caps = segment_caps(tp, j, machine, servo)
         phi, reach_p, reach_n, refused = arc_blend_geometry(tp, j, beta)
         radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(
-            tp, j, tit, machine, caps, (phi, reach_p, reach_n)
+            tp, j, tit, machine, caps, (phi, reach_p, reach_n), kink_caps
         )
     else:
         shorter = np.minimum(tp.length[j], tp.length[j + 1])

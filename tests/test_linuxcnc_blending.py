@@ -337,3 +337,21 @@ def test_a_feed_above_the_machines_runs_at_the_machines(nc):
     kink = 251.0 * math.sin(math.radians(0.02))
     assert ind.values["hold_mm"][0] == 0.0
     assert ind.values["acceleration_share"][0] == pytest.approx(1.0 - kink)
+
+
+def test_the_kink_test_sees_a_short_segments_length_over_one_servo_period(nc):
+    """0.05 mm chords at F6000 (100 mm/s) with t_int = 1.02 ms (servo T = 1 ms): the motion
+    keeps them to 0.05 / 0.00102 = 49.02 mm/s, but the kink test (tpSetupTangent, on the
+    speeds tcClampVelocityByLength set when the line was added: length / T) takes
+    0.05 / 0.001 = 50 mm/s. At a turn of 0.2223 deg (sin = 0.0038799):
+    (50 / 0.001 + 2000) / 2000 0.0038799 = 26 x 0.0038799 = 0.100877 > 0.1, a corner; with
+    49.02 mm/s it would be (49019.6 + 2000) / 2000 x 0.0038799 = 0.098975, tangent.
+    (LinuxCNC 2.9 traces: drawn8's freeform_81003, 4-decimal chords whose 2-quantum turns sit
+    at kink 0.0995 by the 1.02-period speeds, run as corners.)"""
+    ind = tangential(nc, turn(0.2223, length=0.05, feed=100.0), lcnc())
+    assert ind.values["hold_mm"][0] > 0.0  # a blend arc (its speed limit finite)
+    assert ind.feed[0] < INF
+    # a 0.2153 deg turn: 26 sin(0.2153 deg) = 0.097700 < 0.1, tangent
+    near = tangential(nc, turn(0.2153, length=0.05, feed=100.0), lcnc())
+    assert near.feed[0] == INF
+    assert near.values["hold_mm"][0] == 0.0
