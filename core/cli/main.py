@@ -134,6 +134,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         "--effects", metavar="A,B,...", help="only these effects (default: every registered effect)"
     )
     _trace_options(d, "the trace's")
+    _jobs_option(d, "the effects' fits")
     d.add_argument("--json", metavar="OUT", help="write the diagnosis as JSON")
     d.add_argument("--svg", metavar="OUT", help="the path coloured by gap, and feed plots")
     _html_options(d, "the interactive viewer, coloured by gap, measured and predicted feed")
@@ -172,6 +173,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         "trace carries program lines and samples coarser than 50 ms, as MTConnect does)",
     )
     _trace_options(cal, "the traces'")
+    _jobs_option(cal, "the fits of each round of the selection")
 
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
     m.set_defaults(run=cmd_machines, plugins=False)
@@ -255,6 +257,27 @@ def _trace_options(p: argparse.ArgumentParser, whose: str) -> None:
         choices=("setpoint", "actual"),
         help=f"what {whose} positions are (default: from the reader)",
     )
+
+
+def _jobs_option(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument(
+        "--jobs",
+        type=int,
+        metavar="N",
+        help=f"worker processes for {what} (default: the CPUs ncperf may use; 1: none, all "
+        "in this process; the result is the same)",
+    )
+
+
+def _jobs(args: argparse.Namespace) -> int:
+    """The worker processes --jobs asks for, or the default (the CPUs this process may use)."""
+    from core.diagnosis.parallel import default_jobs
+
+    if args.jobs is None:
+        return default_jobs()
+    if args.jobs < 1:
+        raise UsageError(f"--jobs must be 1 or more worker processes, got {args.jobs}")
+    return int(args.jobs)
 
 
 def _wanted(spec: str | None, known: list[str], unknown_message: str) -> list[str] | None:
@@ -475,6 +498,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     from core.engine.effects import setup_for
 
     _check_open(args)
+    jobs = _jobs(args)
     check_outputs((args.json, args.svg, args.html), (args.program, *args.traces, args.machine))
     machine, note = _machine(args)
     effects = nc.effects()
@@ -487,7 +511,9 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
         progress(f"aligning {len(args.traces)} trace(s) on {Path(args.program).name}")
         alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis", progress)
         base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
-        d = nc.diagnose([(tp, alignments, labels)], base, args.baseline, effects, progress)
+        d = nc.diagnose(
+            [(tp, alignments, labels)], base, args.baseline, effects, progress, jobs=jobs
+        )
     print(
         report(
             d,
@@ -529,6 +555,7 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
     from core.engine.effects import setup_for
     from core.model.machine import machine_from_toml_text, machine_text
 
+    jobs = _jobs(args)
     groups = [[args.program, *args.traces], *(args.also or [])]
     check_outputs((args.out,), (*(f for g in groups for f in g), args.machine))
     for g in groups:
@@ -553,7 +580,14 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
             all_labels += labels
         base = setup_for(machine, effects, ramps=True)
         progress(f"calibrating {len(names)} effect(s) on {len(all_labels)} trace(s)")
-        cal = nc.calibrate(cases, base, {k: effects[k] for k in names}, args.objective)
+        cal = nc.calibrate(
+            cases,
+            base,
+            {k: effects[k] for k in names},
+            args.objective,
+            jobs=jobs,
+            progress=progress,
+        )
     header = "\n".join(
         [
             f"Made by ncperf calibrate ({__version__}) on {datetime.date.today()} from",

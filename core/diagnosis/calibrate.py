@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -246,10 +246,15 @@ def calibrate(
     base: Setup,
     effects: Mapping[str, Effect],
     objective: str = "auto",
+    *,
+    jobs: int = 1,
+    progress: Callable[[str], None] | None = None,
 ) -> Calibration:
     """Calibrate the machine of ``base`` on the programs and their aligned traces (see the
     module docstring); ``effects``: those that may be calibrated; ``objective``: "auto",
-    "feed" or "block-time" (:func:`choose_objective`)."""
+    "feed" or "block-time" (:func:`choose_objective`); ``jobs``: worker processes for the
+    fits of each round of the forward selection (the same calibration whatever their
+    number, :mod:`core.diagnosis.parallel`); ``progress``, if given, is told those fits."""
     tps = [tp for tp, _, _ in cases]
     obj, reason = choose_objective(objective, [al for _, als, _ in cases for al in als])
     data: list[Any]
@@ -285,6 +290,8 @@ def calibrate(
         share=CAL_ADD_SHARE,
         most=CAL_MAX,
         objective=obj,
+        progress=progress,
+        jobs=jobs,
     )
     names = [c[0] for c in chosen]
     params_b, preds_b = _refit(indicators_of, tps, base, before, effects, names, fold_b, obj)
