@@ -39,7 +39,7 @@ from pathlib import Path
 from bench_analyze import ncperf  # benchmarks/ is on sys.path: the script's own folder
 
 from core import Ncperf, load_preset
-from core.diagnosis.parallel import default_jobs
+from core.model.workers import default_jobs
 from refvm import simulate, write_csv
 
 ROOT = Path(__file__).resolve().parents[1]

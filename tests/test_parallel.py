@@ -1,6 +1,6 @@
-"""Fits on worker processes (issue 13, ``--jobs``): the same diagnosis and calibration, to
-the bit, as one fit after the other; one after the other where a process may not fork
-(a pool's worker); ``--jobs`` below 1 refused in one line.
+"""Fits and alignment on worker processes (issue 13, ``--jobs``): the same diagnosis,
+calibration and alignment, to the bit, as one task after the other; one after the other
+where a process may not fork (a pool's worker); ``--jobs`` below 1 refused in one line.
 
 The case: the zigzag recorded with a feed override of 0.8 and a 50 ms block time, so that
 the diagnosis names one effect and the forward selection adds the other (both loops of
@@ -9,6 +9,7 @@ fits run on workers), with seven effects: 0.7 s one after the other.
 
 from __future__ import annotations
 
+import dataclasses
 import json
 import multiprocessing
 
@@ -18,8 +19,9 @@ import pytest
 from core import Ncperf, make_plugin_manager
 from core.diagnosis.align import align
 from core.diagnosis.diagnose import Diagnosis
-from core.diagnosis.parallel import can_fork, default_jobs, fit_each
+from core.diagnosis.parallel import fit_each
 from core.engine.effects import Setup
+from core.model.workers import can_fork, default_jobs
 from tests.conftest import machine
 from tests.test_diagnose import synthetic_trace, zigzag
 
@@ -179,6 +181,44 @@ def test_calibration_on_two_processes_is_the_calibration_of_one():
     )
     assert cals[0].effects and cals[0].effects[0].name == "block_cycle_time"
     assert two == one
+
+
+@needs_fork
+def test_alignment_on_two_processes_is_the_alignment_of_one(monkeypatch):
+    """The samples of each program line are projected on workers, pieces of lines each: the
+    same arc lengths and distances to the bit, of the projection itself (the refinement
+    after it would hide a difference) and of the alignment."""
+    import core.diagnosis.align as alignment
+
+    nc = Ncperf(make_plugin_manager(entry_points=False))
+    tp = zigzag()
+    tr = synthetic_trace(nc, tp, Setup(machine=machine(jerk=(INF, INF, INF))))
+    tr = dataclasses.replace(tr, pos=tr.pos + np.array([0.3, -0.2, 0.0]))  # an offset too
+    pieces, projected = [], []
+
+    def counted(fn, count, workers, **kw):
+        pieces.append((count, workers))
+        return workers_map(fn, count, workers, **kw)
+
+    def kept(tp, q, lines, path, jobs=1):
+        out = project(tp, q, lines, path, jobs)
+        projected.append(_bits(out))  # the offset's fit projects first, every sample last
+        return out
+
+    workers_map, project = alignment.forked_map, alignment._project
+    monkeypatch.setattr(alignment, "forked_map", counted)
+    monkeypatch.setattr(alignment, "_project", kept)
+    one = align(tp, tr, jobs=1)
+    last = projected[-1]
+    two = align(tp, tr, jobs=2)
+    assert projected[-1] == last
+    # only the second ran on workers, in pieces of lines (up to LINE_PIECES a worker)
+    ((count, workers),) = pieces
+    assert workers == 2 and 2 < count <= 2 * alignment.LINE_PIECES
+    for f in ("s", "v", "t", "line", "offset", "distance"):
+        assert _bits(getattr(two, f)) == _bits(getattr(one, f))
+    assert (two.coverage, two.far_share, two.message) == (one.coverage, one.far_share, one.message)
+    assert np.linalg.norm(one.offset - [0.3, -0.2, 0.0]) < 0.05
 
 
 def test_default_jobs_is_the_cpus_this_process_may_use():

@@ -134,7 +134,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         "--effects", metavar="A,B,...", help="only these effects (default: every registered effect)"
     )
     _trace_options(d, "the trace's")
-    _jobs_option(d, "the effects' fits")
+    _jobs_option(d, "the alignment and the effects' fits")
     d.add_argument("--json", metavar="OUT", help="write the diagnosis as JSON")
     d.add_argument("--svg", metavar="OUT", help="the path coloured by gap, and feed plots")
     _html_options(d, "the interactive viewer, coloured by gap, measured and predicted feed")
@@ -173,7 +173,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         "trace carries program lines and samples coarser than 50 ms, as MTConnect does)",
     )
     _trace_options(cal, "the traces'")
-    _jobs_option(cal, "the fits of each round of the selection")
+    _jobs_option(cal, "the alignments and the fits of each round of the selection")
 
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
     m.set_defaults(run=cmd_machines, plugins=False)
@@ -271,7 +271,7 @@ def _jobs_option(p: argparse.ArgumentParser, what: str) -> None:
 
 def _jobs(args: argparse.Namespace) -> int:
     """The worker processes --jobs asks for, or the default (the CPUs this process may use)."""
-    from core.diagnosis.parallel import default_jobs
+    from core.model.workers import default_jobs
 
     if args.jobs is None:
         return default_jobs()
@@ -299,10 +299,11 @@ def _aligned(
     args: argparse.Namespace,
     purpose: str,
     progress: _Progress | None = None,
+    jobs: int = 1,
 ) -> tuple[list, list[str]]:
     """Each trace read (its warnings printed, below a ``progress`` line if one is up) and
-    aligned on ``tp``, and its label; a trace that does not align is an error ending "no
-    ``purpose``"."""
+    aligned on ``tp`` (on ``jobs`` worker processes), and its label; a trace that does not
+    align is an error ending "no ``purpose``"."""
     from core.diagnosis.align import align
     from core.model.trace import TraceOptions
 
@@ -313,7 +314,7 @@ def _aligned(
         if progress is not None and tr.notices:
             progress.clear()  # the warnings start on a line of their own
         _print_notices(tr.notices, sys.stderr)
-        al = align(tp, tr)
+        al = align(tp, tr, jobs=jobs)
         if not al.ok:
             raise InputError(f"{al.message}; no {purpose}", source=path)
         alignments.append(al)
@@ -509,7 +510,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     _print_notices(tp.notices, sys.stderr)
     with _Progress("ncperf diagnose", sys.stderr) as progress:
         progress(f"aligning {len(args.traces)} trace(s) on {Path(args.program).name}")
-        alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis", progress)
+        alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis", progress, jobs)
         base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
         d = nc.diagnose(
             [(tp, alignments, labels)], base, args.baseline, effects, progress, jobs=jobs
@@ -575,7 +576,7 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
             progress.clear()
             _print_notices(tp.notices, sys.stderr)
             progress(f"aligning {len(traces)} trace(s) on {Path(program).name}")
-            als, labels = _aligned(nc, tp, traces, args, "calibration", progress)
+            als, labels = _aligned(nc, tp, traces, args, "calibration", progress, jobs)
             cases.append((tp, als, labels))
             all_labels += labels
         base = setup_for(machine, effects, ramps=True)
