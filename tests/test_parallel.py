@@ -221,6 +221,47 @@ def test_alignment_on_two_processes_is_the_alignment_of_one(monkeypatch):
     assert np.linalg.norm(one.offset - [0.3, -0.2, 0.0]) < 0.05
 
 
+@needs_fork
+def test_a_task_that_fails_or_a_worker_that_dies_is_an_error_not_a_wait():
+    """A task's exception comes back as itself; a worker killed (as the out-of-memory killer
+    does, SIGKILL) is a MemoryError within POLL_S, not a wait for a result that never comes
+    (a pool replaces the worker and loses its task)."""
+    import os
+    import signal
+    import time
+
+    from core.model.workers import POLL_S, forked_map
+
+    def fails(k: int) -> int:
+        if k == 2:
+            raise ValueError(f"task {k} fails")
+        return k * k
+
+    assert forked_map(lambda k: k * k, 5, 2) == [0, 1, 4, 9, 16]
+    with pytest.raises(ValueError, match="task 2 fails"):
+        forked_map(fails, 5, 2)
+
+    def dies(k: int) -> int:
+        if k == 1:
+            os.kill(os.getpid(), signal.SIGKILL)
+        time.sleep(0.2)
+        return k
+
+    def hung(*_: object) -> None:
+        raise TimeoutError("forked_map still waits 30 s after its worker died")
+
+    old = signal.signal(signal.SIGALRM, hung)  # a hang fails the test rather than the run
+    signal.alarm(30)
+    try:
+        t0 = time.monotonic()
+        with pytest.raises(MemoryError, match="SIGKILL"):
+            forked_map(dies, 4, 2)
+        assert time.monotonic() - t0 < 10 * POLL_S
+    finally:
+        signal.alarm(0)
+        signal.signal(signal.SIGALRM, old)
+
+
 def test_default_jobs_is_the_cpus_this_process_may_use():
     import os
 

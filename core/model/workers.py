@@ -46,6 +46,8 @@ class Task:
     shared: tuple[object, ...]
 
 
+#: How often a wait for the next result looks whether a worker died (s).
+POLL_S = 0.5
 #: The task of the pool being made or running; None between pools (set and cleared under
 #: LOCK, so that two threads never give their children each other's work).
 TASK: Task | None = None
@@ -96,15 +98,41 @@ def forked_map(
         TASK = Task(fn, tuple(shared))
         try:
             ctx = multiprocessing.get_context("fork")
+            before = set(multiprocessing.active_children())
             with ctx.Pool(workers, initializer=_ignore_interrupts) as pool:
-                tasks = range(count) if order is None else order
-                for i, (k, blob) in enumerate(pool.imap_unordered(_run, tasks), start=1):
+                started = [p for p in multiprocessing.active_children() if p not in before]
+                results = pool.imap_unordered(_run, range(count) if order is None else order)
+                for i in range(1, count + 1):
+                    k, blob = _next(results, started)
                     got[k] = _loads(blob, TASK.shared)
                     if done is not None:
                         done(k, i)
         finally:
             TASK = None
     return [got[k] for k in range(count)]
+
+
+def _next(results: Any, workers: Sequence[multiprocessing.process.BaseProcess]) -> Any:
+    """The next result of a pool's ``imap_unordered``; an error where one of its
+    ``workers`` ended meanwhile. (A pool replaces a worker that dies, but the task it was
+    running never comes back: without this the wait would never end. A pool's workers end
+    only when it is closed, so an exit code while it runs is a death: killed -- SIGKILL is
+    what the kernel's out-of-memory killer sends -- or crashed.)"""
+    while True:
+        try:
+            return results.next(timeout=POLL_S)
+        except multiprocessing.TimeoutError:
+            pass
+        for w in workers:
+            code = w.exitcode
+            if code is None:
+                continue
+            if code == -signal.SIGKILL:
+                raise MemoryError(
+                    f"a worker process was killed (SIGKILL, pid {w.pid}): out of memory? "
+                    "(fewer --jobs need less)"
+                )
+            raise RuntimeError(f"a worker process ended with exit code {code} (pid {w.pid})")
 
 
 def _ignore_interrupts() -> None:
