@@ -158,12 +158,15 @@ def test_a_pool_worker_fits_in_turn(serial):
 
 @needs_fork
 def test_calibration_on_two_processes_is_the_calibration_of_one():
+    """A block time and an override: the selection's rounds and the override's two
+    parameters' range scans run on workers, to the same machine."""
     from tests.test_calibrate import cases_for, square_spiral
 
     nc = Ncperf(make_plugin_manager(entry_points=False))
     m = machine(jerk=(INF, INF, INF))
     effects = nc.effects()
     truth = effects["block_cycle_time"].apply(Setup(machine=m), {"t_block": 0.03})
+    truth = effects["feed_override"].apply(truth, {"scale": 0.8, "caps": 0.0})
     cases = cases_for(nc, truth, (zigzag(), square_spiral()))
     wanted = {k: effects[k] for k in ("block_cycle_time", "corner_tolerance", "feed_override")}
     cals = [nc.calibrate(cases, Setup(machine=m), wanted, jobs=j) for j in (1, 2)]
@@ -179,7 +182,7 @@ def test_calibration_on_two_processes_is_the_calibration_of_one():
         )
         for cal in cals
     )
-    assert cals[0].effects and cals[0].effects[0].name == "block_cycle_time"
+    assert {c.name for c in cals[0].effects} == {"block_cycle_time", "feed_override"}
     assert two == one
 
 
