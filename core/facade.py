@@ -186,13 +186,17 @@ class Ncperf:
         baseline: str,
         effects: Mapping[str, Effect],
         progress: Callable[[str], None] | None = None,
+        *,
+        jobs: int = 1,
     ) -> Diagnosis:
         """The diagnosis of programs against their aligned traces (each case: a tool path,
         its alignments and their labels), on one machine (``base``), with these effects
-        (see :mod:`core.diagnosis.diagnose`)."""
+        (see :mod:`core.diagnosis.diagnose`). ``jobs``: worker processes for the fits (the
+        same diagnosis, sooner; :mod:`core.diagnosis.parallel`); 1, in this process, unless
+        asked."""
         from core.diagnosis.diagnose import diagnose_cases  # only the diagnosis pays for it
 
-        return diagnose_cases(self.indicators, cases, base, baseline, effects, progress)
+        return diagnose_cases(self.indicators, cases, base, baseline, effects, progress, jobs=jobs)
 
     def calibrate(
         self,
@@ -200,13 +204,20 @@ class Ncperf:
         base: Setup,
         effects: Mapping[str, Effect],
         objective: str = "auto",
+        *,
+        jobs: int = 1,
+        progress: Callable[[str], None] | None = None,
     ) -> Calibration:
         """The machine of ``base`` calibrated on programs and their aligned traces, with
         these (controller) effects, on the ``objective`` "auto", "feed" or "block-time"
-        (see :mod:`core.diagnosis.calibrate`)."""
+        (see :mod:`core.diagnosis.calibrate`). ``jobs``: worker processes for the
+        independent fits of each round of the selection (the same calibration, sooner); 1
+        unless asked. ``progress``, if given, is told each round's fits."""
         from core.diagnosis.calibrate import calibrate  # only calibration pays for it
 
-        return calibrate(self.indicators, cases, base, effects, objective)
+        return calibrate(
+            self.indicators, cases, base, effects, objective, jobs=jobs, progress=progress
+        )
 
     # command line
     def add_commands(self, subparsers: argparse._SubParsersAction) -> None:

@@ -134,6 +134,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         "--effects", metavar="A,B,...", help="only these effects (default: every registered effect)"
     )
     _trace_options(d, "the trace's")
+    _jobs_option(d, "the alignment and the effects' fits")
     d.add_argument("--json", metavar="OUT", help="write the diagnosis as JSON")
     d.add_argument("--svg", metavar="OUT", help="the path coloured by gap, and feed plots")
     _html_options(d, "the interactive viewer, coloured by gap, measured and predicted feed")
@@ -172,6 +173,7 @@ def _parser(nc: Ncperf) -> argparse.ArgumentParser:
         "trace carries program lines and samples coarser than 50 ms, as MTConnect does)",
     )
     _trace_options(cal, "the traces'")
+    _jobs_option(cal, "the alignments and the fits of each round of the selection")
 
     m = sub.add_parser("machines", help="list machine presets (the names --machine takes)")
     m.set_defaults(run=cmd_machines, plugins=False)
@@ -257,6 +259,27 @@ def _trace_options(p: argparse.ArgumentParser, whose: str) -> None:
     )
 
 
+def _jobs_option(p: argparse.ArgumentParser, what: str) -> None:
+    p.add_argument(
+        "--jobs",
+        type=int,
+        metavar="N",
+        help=f"worker processes for {what} (default: the CPUs ncperf may use; 1: none, all "
+        "in this process; the result is the same)",
+    )
+
+
+def _jobs(args: argparse.Namespace) -> int:
+    """The worker processes --jobs asks for, or the default (the CPUs this process may use)."""
+    from core.model.workers import default_jobs
+
+    if args.jobs is None:
+        return default_jobs()
+    if args.jobs < 1:
+        raise UsageError(f"--jobs must be 1 or more worker processes, got {args.jobs}")
+    return int(args.jobs)
+
+
 def _wanted(spec: str | None, known: list[str], unknown_message: str) -> list[str] | None:
     """The names of a comma-separated ``--effects`` (None when not given); a name not in
     ``known`` is a usage error: ``unknown_message`` formatted with ``names`` and ``known``."""
@@ -276,10 +299,11 @@ def _aligned(
     args: argparse.Namespace,
     purpose: str,
     progress: _Progress | None = None,
+    jobs: int = 1,
 ) -> tuple[list, list[str]]:
     """Each trace read (its warnings printed, below a ``progress`` line if one is up) and
-    aligned on ``tp``, and its label; a trace that does not align is an error ending "no
-    ``purpose``"."""
+    aligned on ``tp`` (on ``jobs`` worker processes), and its label; a trace that does not
+    align is an error ending "no ``purpose``"."""
     from core.diagnosis.align import align
     from core.model.trace import TraceOptions
 
@@ -290,7 +314,7 @@ def _aligned(
         if progress is not None and tr.notices:
             progress.clear()  # the warnings start on a line of their own
         _print_notices(tr.notices, sys.stderr)
-        al = align(tp, tr)
+        al = align(tp, tr, jobs=jobs)
         if not al.ok:
             raise InputError(f"{al.message}; no {purpose}", source=path)
         alignments.append(al)
@@ -475,6 +499,7 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     from core.engine.effects import setup_for
 
     _check_open(args)
+    jobs = _jobs(args)
     check_outputs((args.json, args.svg, args.html), (args.program, *args.traces, args.machine))
     machine, note = _machine(args)
     effects = nc.effects()
@@ -485,9 +510,11 @@ def cmd_diagnose(args: argparse.Namespace, nc: Ncperf) -> int:
     _print_notices(tp.notices, sys.stderr)
     with _Progress("ncperf diagnose", sys.stderr) as progress:
         progress(f"aligning {len(args.traces)} trace(s) on {Path(args.program).name}")
-        alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis", progress)
+        alignments, labels = _aligned(nc, tp, args.traces, args, "diagnosis", progress, jobs)
         base = setup_for(machine, nc.effects(), ramps=args.baseline == "profile")
-        d = nc.diagnose([(tp, alignments, labels)], base, args.baseline, effects, progress)
+        d = nc.diagnose(
+            [(tp, alignments, labels)], base, args.baseline, effects, progress, jobs=jobs
+        )
     print(
         report(
             d,
@@ -529,6 +556,7 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
     from core.engine.effects import setup_for
     from core.model.machine import machine_from_toml_text, machine_text
 
+    jobs = _jobs(args)
     groups = [[args.program, *args.traces], *(args.also or [])]
     check_outputs((args.out,), (*(f for g in groups for f in g), args.machine))
     for g in groups:
@@ -548,12 +576,19 @@ def cmd_calibrate(args: argparse.Namespace, nc: Ncperf) -> int:
             progress.clear()
             _print_notices(tp.notices, sys.stderr)
             progress(f"aligning {len(traces)} trace(s) on {Path(program).name}")
-            als, labels = _aligned(nc, tp, traces, args, "calibration", progress)
+            als, labels = _aligned(nc, tp, traces, args, "calibration", progress, jobs)
             cases.append((tp, als, labels))
             all_labels += labels
         base = setup_for(machine, effects, ramps=True)
         progress(f"calibrating {len(names)} effect(s) on {len(all_labels)} trace(s)")
-        cal = nc.calibrate(cases, base, {k: effects[k] for k in names}, args.objective)
+        cal = nc.calibrate(
+            cases,
+            base,
+            {k: effects[k] for k in names},
+            args.objective,
+            jobs=jobs,
+            progress=progress,
+        )
     header = "\n".join(
         [
             f"Made by ncperf calibrate ({__version__}) on {datetime.date.today()} from",

@@ -29,11 +29,15 @@ from core.model.sampling import PROJECTION_STEP, PathSamples, isotonic
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.model.trace import Trace
+from core.model.workers import forked_map, workers_for
 
 #: Samples per sequential search chunk without line numbers, and how far ahead (mm) beyond
 #: what the fastest move could cover a chunk may look.
 CHUNK = 256
 AHEAD_MARGIN = 5.0
+#: Pieces of program lines per worker process the projection is cut into (pieces of about
+#: equal sample counts; several per worker, so that one slow piece does not hold the others).
+LINE_PIECES = 4
 #: A sample farther than this from the path (mm) is "off the path" for the quality figures
 #: (at least; 20 x the largest path tolerance when that is larger).
 FAR = 0.5
@@ -140,9 +144,11 @@ def _run_on(q: NDArray, start: float) -> tuple[NDArray, NDArray]:
 
 
 def _project(
-    tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples
+    tp: ToolPath, q: NDArray, lines: NDArray | None, path: PathSamples, jobs: int = 1
 ) -> tuple[NDArray, NDArray]:
-    """Arc length and distance of points ``q`` on the path (see the module docstring)."""
+    """Arc length and distance of points ``q`` on the path (see the module docstring). With
+    lines, each line's samples are projected on their own (on ``jobs`` worker processes,
+    LINE_PIECES pieces of lines each, where it can: :mod:`core.diagnosis.parallel`)."""
     pts, s_p, owner = path.points, path.s, path.move
     m = q.shape[0]
     s = np.zeros(m)
@@ -157,56 +163,84 @@ def _project(
         for u, a, b in zip(uniq.tolist(), first_idx.tolist(), last_idx.tolist(), strict=True):
             mv = order[a:b]
             moves_of_line[u] = (int(mv.min()), int(mv.max()))
-        done = np.zeros(m, dtype=bool)
         # The samples of each line (in time order), and the path points of moves a..b as
         # index ranges: the path points are in move order, and (checked) in arc length.
         by_line = np.argsort(line_of_sample, kind="stable")
         u_all, u_first = np.unique(line_of_sample[by_line], return_index=True)
         u_last = np.append(u_first[1:], m)
         ordered = s_p.size < 2 or bool(np.all(s_p[1:] >= s_p[:-1]))
-        for u, f0, f1 in zip(u_all.tolist(), u_first.tolist(), u_last.tolist(), strict=True):
-            if u not in moves_of_line:
-                continue
-            sel = by_line[f0:f1]
-            a, b = moves_of_line[u]
-            # The move of the line, or its neighbours (blends carry a neighbour's line),
-            # or up to LAG_BACK mm behind (actual positions lag the setpoint's line) where
-            # one of them is nearer: the line's own move wins ties, such as a plunge back
-            # down the path of the retract before it.
-            if ordered:
-                i_a, i_b1 = np.searchsorted(owner, (a, b + 1))
-                own = np.arange(i_a, i_b1)
-                s_a = s_p[own[0]] if own.size else 0.0
-                i_n0, i_n1 = np.searchsorted(owner, (a - 1, b + 2))
-                i_s = int(np.searchsorted(s_p, s_a - LAG_BACK))  # first s_p >= s_a - LAG_BACK
-                lag = np.arange(i_s, i_b1)
-                near = np.arange(i_n0, i_n1)
-                win = (
-                    np.arange(min(i_n0, i_s), max(i_n1, i_b1))
-                    if lag.size and near.size and i_s <= i_n1 and i_n0 <= i_b1
-                    else np.union1d(near, lag)
-                )
-            else:
-                own = np.flatnonzero((owner >= a) & (owner <= b))
-                s_a = s_p[own[0]] if own.size else 0.0
-                win = np.flatnonzero(
-                    ((owner >= a - 1) & (owner <= b + 1)) | ((s_p >= s_a - LAG_BACK) & (owner <= b))
-                )
-            # (on from the line's start: a drilling cycle's feed down and rapid back up its
-            # own hole are one line)
-            _, s_exp = _run_on(q[sel], s_a)
-            for c in range(0, sel.size, 2048):
-                part = sel[c : c + 2048]
-                e = s_exp[c : c + 2048]
-                k, dd = _nearest(q[part], pts[own], s_p[own], e)
-                s[part] = s_p[own[k]]
-                dist[part] = dd
-                if win.size > own.size:
-                    k2, d2 = _nearest(q[part], pts[win], s_p[win], e)
-                    nearer = d2 < dd - TOL.pass_tie
-                    s[part[nearer]] = s_p[win[k2[nearer]]]
-                    dist[part[nearer]] = d2[nearer]
-            done[sel] = True
+
+        def piece(j0: int, j1: int) -> tuple[NDArray, NDArray, NDArray]:
+            """Lines j0..j1-1 (of ``u_all``): the arc length, distance and whether placed
+            of their samples, ``by_line[u_first[j0]:u_last[j1 - 1]]``."""
+            f_lo = int(u_first[j0])
+            size = int(u_last[j1 - 1]) - f_lo
+            s_g, dist_g = np.zeros(size), np.full(size, np.inf)
+            done_g = np.zeros(size, dtype=bool)
+            for u, f0, f1 in zip(
+                u_all[j0:j1].tolist(), u_first[j0:j1].tolist(), u_last[j0:j1].tolist(), strict=True
+            ):
+                if u not in moves_of_line:
+                    continue
+                sel = by_line[f0:f1]
+                a, b = moves_of_line[u]
+                # The move of the line, or its neighbours (blends carry a neighbour's line),
+                # or up to LAG_BACK mm behind (actual positions lag the setpoint's line)
+                # where one of them is nearer: the line's own move wins ties, such as a
+                # plunge back down the path of the retract before it.
+                if ordered:
+                    i_a, i_b1 = np.searchsorted(owner, (a, b + 1))
+                    own = np.arange(i_a, i_b1)
+                    s_a = s_p[own[0]] if own.size else 0.0
+                    i_n0, i_n1 = np.searchsorted(owner, (a - 1, b + 2))
+                    i_s = int(np.searchsorted(s_p, s_a - LAG_BACK))  # first s_p >= s_a - LAG_BACK
+                    lag = np.arange(i_s, i_b1)
+                    near = np.arange(i_n0, i_n1)
+                    win = (
+                        np.arange(min(i_n0, i_s), max(i_n1, i_b1))
+                        if lag.size and near.size and i_s <= i_n1 and i_n0 <= i_b1
+                        else np.union1d(near, lag)
+                    )
+                else:
+                    own = np.flatnonzero((owner >= a) & (owner <= b))
+                    s_a = s_p[own[0]] if own.size else 0.0
+                    win = np.flatnonzero(
+                        ((owner >= a - 1) & (owner <= b + 1))
+                        | ((s_p >= s_a - LAG_BACK) & (owner <= b))
+                    )
+                # (on from the line's start: a drilling cycle's feed down and rapid back up
+                # its own hole are one line)
+                _, s_exp = _run_on(q[sel], s_a)
+                for c in range(0, sel.size, 2048):
+                    part = sel[c : c + 2048]
+                    e = s_exp[c : c + 2048]
+                    # where the part's samples are in this piece's arrays
+                    at = slice(f0 - f_lo + c, f0 - f_lo + c + part.size)
+                    k, dd = _nearest(q[part], pts[own], s_p[own], e)
+                    s_g[at] = s_p[own[k]]
+                    dist_g[at] = dd
+                    if win.size > own.size:
+                        k2, d2 = _nearest(q[part], pts[win], s_p[win], e)
+                        nearer = d2 < dd - TOL.pass_tie
+                        s_g[at][nearer] = s_p[win[k2[nearer]]]
+                        dist_g[at][nearer] = d2[nearer]
+                done_g[f0 - f_lo : f1 - f_lo] = True
+            return s_g, dist_g, done_g
+
+        # pieces of lines with about as many samples each
+        workers = workers_for(jobs, u_all.size)
+        count = 1 if workers == 1 else workers * LINE_PIECES
+        bounds = np.searchsorted(u_first, np.linspace(0, m, count + 1)[1:-1]).tolist()
+        edges = [0, *bounds, int(u_all.size)]
+        spans = [(j0, j1) for j0, j1 in zip(edges[:-1], edges[1:], strict=True) if j1 > j0]
+        if len(spans) == 1:
+            placed = [piece(*spans[0])]
+        else:
+            placed = forked_map(lambda k: piece(*spans[k]), len(spans), workers)
+        done = np.zeros(m, dtype=bool)
+        for (j0, j1), (s_g, dist_g, done_g) in zip(spans, placed, strict=True):
+            idx = by_line[int(u_first[j0]) : int(u_last[j1 - 1])]
+            s[idx], dist[idx], done[idx] = s_g, dist_g, done_g
         rest = np.flatnonzero(~done)
     else:
         rest = np.arange(m)
@@ -297,8 +331,10 @@ def _mismatch(t: NDArray, v_col: NDArray, v_pos: NDArray) -> float:
     return float(np.sqrt(np.mean((a - b) ** 2)) / norm) if norm > 0 else 0.0
 
 
-def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True) -> Alignment:
-    """Place every sample of ``trace`` on the path of ``tp`` (see the module docstring)."""
+def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True, jobs: int = 1) -> Alignment:
+    """Place every sample of ``trace`` on the path of ``tp`` (see the module docstring);
+    ``jobs``: worker processes for the projection of the samples of each program line (the
+    same alignment, sooner)."""
     start_s, end_s = tp.start_s, tp.end_s
     total_feed = float(tp.length[tp.is_feed].sum()) or float(tp.length.sum())
     tol = np.nan_to_num(tp.tolerance, nan=0.0)
@@ -308,7 +344,7 @@ def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True) -> Alignment:
         path = tp.sample(PROJECTION_STEP)
         off = _offset(tp, trace.pos, trace.line, path) if fit_offset else np.zeros(3)
         q = trace.pos - off
-        s_raw, dist = _project(tp, q, trace.line, path)
+        s_raw, dist = _project(tp, q, trace.line, path, jobs)
         s = isotonic(s_raw)
         for _ in range(2):
             s_raw, _ = path.project_near(q, s)

@@ -35,7 +35,7 @@ from __future__ import annotations
 
 import dataclasses
 import math
-from collections.abc import Mapping, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -55,6 +55,7 @@ from core.engine.predict import Prediction
 from core.model.errors import UsageError
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
+from core.model.workers import forked_map, workers_for
 
 #: The effects that are what a controller does (a feed override is the operator's).
 CONTROLLER_EFFECTS = (
@@ -246,10 +247,16 @@ def calibrate(
     base: Setup,
     effects: Mapping[str, Effect],
     objective: str = "auto",
+    *,
+    jobs: int = 1,
+    progress: Callable[[str], None] | None = None,
 ) -> Calibration:
     """Calibrate the machine of ``base`` on the programs and their aligned traces (see the
     module docstring); ``effects``: those that may be calibrated; ``objective``: "auto",
-    "feed" or "block-time" (:func:`choose_objective`)."""
+    "feed" or "block-time" (:func:`choose_objective`); ``jobs``: worker processes for the
+    fits of each round of the forward selection and the scans of the parameters' ranges
+    (the same calibration whatever their number, :mod:`core.model.workers`); ``progress``,
+    if given, is told those fits."""
     tps = [tp for tp, _, _ in cases]
     obj, reason = choose_objective(objective, [al for _, als, _ in cases for al in als])
     data: list[Any]
@@ -285,6 +292,8 @@ def calibrate(
         share=CAL_ADD_SHARE,
         most=CAL_MAX,
         objective=obj,
+        progress=progress,
+        jobs=jobs,
     )
     names = [c[0] for c in chosen]
     params_b, preds_b = _refit(indicators_of, tps, base, before, effects, names, fold_b, obj)
@@ -301,7 +310,7 @@ def calibrate(
         ranges: dict[str, tuple[float, float]] = {}
         documented: dict[str, str] = {}
         if eff.params:
-            ranges = _ranges(indicators_of, tps, final, eff, values, everything, floor, obj)
+            ranges = _ranges(indicators_of, tps, final, eff, values, everything, floor, obj, jobs)
             for p in eff.params:
                 lo = min(ranges[p.name][0], params_a[p.name], params_b[k][p.name])
                 hi = max(ranges[p.name][1], params_a[p.name], params_b[k][p.name])
@@ -347,17 +356,20 @@ def _ranges(
     data: Sequence[Any],
     floor: float,
     objective: Objective = FEED,
+    jobs: int = 1,
 ) -> dict[str, tuple[float, float]]:
     """Per parameter (the others at ``values``): the values around the written one whose
     gap on all the data is within RANGE_SHARE of its gap, or within the noise floor of it
     (values the data cannot tell apart): steps doubling outwards until one is out, then
-    bisection of the edge (RANGE_BISECT rounds)."""
-    out: dict[str, tuple[float, float]] = {}
-    for p in eff.params:
+    bisection of the edge (RANGE_BISECT rounds). The parameters are scanned on ``jobs``
+    worker processes where it can (each scan on its own: the same ranges)."""
+
+    def scan(k: int) -> tuple[float, float]:
+        p = eff.params[k]
         v0 = float(values[p.name])
 
-        def gap_at(x: float, name: str = p.name) -> float:
-            preds = predict_all(indicators_of, tps, eff.apply(base, dict(values) | {name: x}))
+        def gap_at(x: float) -> float:
+            preds = predict_all(indicators_of, tps, eff.apply(base, dict(values) | {p.name: x}))
             return objective.gap(preds, data, "calibration")
 
         g0 = gap_at(v0)
@@ -384,5 +396,9 @@ def _ranges(
                     else:
                         inside = mid
             edges.append(inside)
-        out[p.name] = (min(edges), max(edges))
-    return out
+        return min(edges), max(edges)
+
+    n = len(eff.params)
+    workers = workers_for(jobs, n)
+    spans = forked_map(scan, n, workers) if workers > 1 else [scan(k) for k in range(n)]
+    return {p.name: span for p, span in zip(eff.params, spans, strict=True)}

@@ -41,9 +41,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core.diagnosis.align import Alignment
-from core.diagnosis.fit import bounded, fit, predict_all
+from core.diagnosis.fit import bounded, predict_all
 from core.diagnosis.gaps import GapZone, gap_zones
 from core.diagnosis.objective import FEED, Objective
+from core.diagnosis.parallel import fit_each
 from core.diagnosis.resample import (
     Data,
     feed_level,
@@ -82,6 +83,15 @@ from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.view.annotations import Annotations
 from core.view.targets import file_target
+
+#: Progress lines of the forward selection (:func:`add_effects`, formats of
+#: :func:`core.diagnosis.parallel.fit_each`): as each fit starts, as the fits of a round
+#: start on worker processes, as each of those ends.
+COMBINE_STEP = "combining effects: fitting {name} on top of the chosen ones"
+COMBINE_START = (
+    "combining effects: fitting {n} effects on top of the chosen ones, on {workers} processes"
+)
+COMBINE_DONE = "combining effects: fitted {name} on top of the chosen ones ({k} of {n})"
 
 
 @dataclass(frozen=True)
@@ -199,11 +209,14 @@ def diagnose_cases(
     baseline: str,
     effects: Mapping[str, Effect],
     progress: Callable[[str], None] | None = None,
+    *,
+    jobs: int = 1,
 ) -> Diagnosis:
     """The diagnosis of several programs, each with its aligned traces, on one machine:
     effects are fitted on some traces and measured on the others (see the module docstring).
-    ``progress``, if given, is told what is being done (one short line per step)."""
-    say = progress or (lambda _: None)
+    ``progress``, if given, is told what is being done (one short line per step); ``jobs``:
+    the worker processes the independent fits may run on (:mod:`core.diagnosis.parallel`;
+    the diagnosis is the same whatever their number)."""
     tps = [tp for tp, _, _ in cases]
     data = [
         resample(tp, al, lab, case=k)
@@ -214,21 +227,13 @@ def diagnose_cases(
     before = predict_all(indicators_of, tps, base)
     g_before_all = gap(before, data, "all")
     g_before = gap(before, data, "held_out")
-    results = []
-    fitted: dict[str, tuple[dict[str, float], list[Prediction]]] = {}
-    for k, (name, eff) in enumerate(effects.items(), start=1):
-        say(f"fitting {name} ({k} of {len(effects)} effects)")
-        params, preds = fit(indicators_of, tps, base, eff, data)
-        fitted[name] = (params, preds)
-        results.append(
-            EffectResult(
-                name,
-                params,
-                g_before,
-                gap(preds, data, "held_out"),
-                gap(preds, data, "calibration"),
-            )
+    fitted = fit_each(indicators_of, tps, base, effects, data, jobs=jobs, progress=progress)
+    results = [
+        EffectResult(
+            name, params, g_before, gap(preds, data, "held_out"), gap(preds, data, "calibration")
         )
+        for name, (params, preds) in fitted.items()
+    ]
     sq_before, _ = held_out_chunks(before, data)
     for k, r in enumerate(results):
         sq_after, _ = held_out_chunks(fitted[r.name][1], data)
@@ -270,6 +275,7 @@ def diagnose_cases(
             most=MAX_CHOSEN - 1,
             stop=STOP_SHARE * g_before,
             progress=progress,
+            jobs=jobs,
         )
         for name, params, _, _ in added:
             chosen.append(name)
@@ -324,25 +330,37 @@ def add_effects(
     stop: float = 0.0,
     progress: Callable[[str], None] | None = None,
     objective: Objective = FEED,
+    jobs: int = 1,
 ) -> tuple[list[tuple[str, dict[str, float], float, float]], Setup, list[Prediction]]:
     """Forward selection on top of ``current`` (whose predictions are ``preds``): every
-    effect not yet added is fitted on the calibration data, and the one leaving the least
-    held-out gap is added while it :func:`clears` the test (``share`` of what is left), at
-    most ``most`` of them and while the gap is at least ``stop`` (mm/min). Returns (effect,
-    params, gap before, gap after) in the order added, the setup and its predictions. The
-    gaps are ``objective``'s (the feed gap, mm/min, unless told)."""
+    effect not yet added is fitted on the calibration data (on ``jobs`` worker processes,
+    :func:`core.diagnosis.parallel.fit_each`), and the one leaving the least held-out gap is
+    added while it :func:`clears` the test (``share`` of what is left), at most ``most`` of
+    them and while the gap is at least ``stop`` (mm/min). Returns (effect, params, gap
+    before, gap after) in the order added, the setup and its predictions. The gaps are
+    ``objective``'s (the feed gap, mm/min, unless told)."""
     g_now = objective.gap(preds, data, "held_out")
     sq_now = objective.chunks(preds, data)[0]
     added: list[tuple[str, dict[str, float], float, float]] = []
     while len(added) < most and g_now >= stop:
-        trials = []
-        for name, eff in effects.items():
-            if any(a[0] == name for a in added):
-                continue
-            if progress is not None:
-                progress(f"combining effects: fitting {name} on top of the chosen ones")
-            params, p = fit(indicators_of, tps, current, eff, data, objective)
-            trials.append((objective.gap(p, data, "held_out"), name, params, p))
+        left = {name: eff for name, eff in effects.items() if all(a[0] != name for a in added)}
+        fitted = fit_each(
+            indicators_of,
+            tps,
+            current,
+            left,
+            data,
+            objective,
+            jobs=jobs,
+            progress=progress,
+            step=COMBINE_STEP,
+            start=COMBINE_START,
+            done=COMBINE_DONE,
+        )
+        trials = [
+            (objective.gap(p, data, "held_out"), name, params, p)
+            for name, (params, p) in fitted.items()
+        ]
         if not trials:
             break
         g_new, name, params, p = min(trials, key=lambda x: x[0])
