@@ -148,7 +148,7 @@ def _project(
 ) -> tuple[NDArray, NDArray]:
     """Arc length and distance of points ``q`` on the path (see the module docstring). With
     lines, each line's samples are projected on their own (on ``jobs`` worker processes,
-    LINE_PIECES pieces of lines each, where it can: :mod:`core.diagnosis.parallel`)."""
+    LINE_PIECES pieces of lines each, where it can: :mod:`core.model.workers`)."""
     pts, s_p, owner = path.points, path.s, path.move
     m = q.shape[0]
     s = np.zeros(m)
