@@ -74,6 +74,7 @@ SEEDS = {
     "drawn7": 70500,
     "drawn8": 80500,
     "drawn9": 90500,
+    "drawn10": 100500,
 }
 #: Programs per changed setting.
 PER_VARIANT = 4
@@ -207,7 +208,7 @@ CONTROL = Variant("unchanged", "unchanged machine", None, ALL)
 #: value from the range of its kind (seeded by the case), so that neither the programs nor
 #: the settings are ones the effects and the decision rule were developed on. The values of
 #: the fixed sets lie inside these ranges.
-DRAWN = {"drawn7", "drawn8", "drawn9"}
+DRAWN = {"drawn7", "drawn8", "drawn9", "drawn10"}
 
 
 def _u(rng: np.random.Generator, lo: float, hi: float, digits: int = 0) -> float:
