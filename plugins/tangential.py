@@ -364,18 +364,21 @@ def linuxcnc_choice(
 
 
 def segment_caps(
-    tp: ToolPath, j: NDArray[np.int64], machine: Machine, block_time: float | None = None
-) -> tuple[NDArray, NDArray]:
+    tp: ToolPath, j: NDArray[np.int64], machine: Machine, *block_times: float
+) -> list[tuple[NDArray, NDArray]]:
     """The top speed of the segments before and after junctions ``j`` (tcGetMaxTargetVel):
     the programmed feed within min_k Vmax_k / share_k and the path speed limit (a program's
-    F above the machine's runs at the machine's), and the length over one block time
-    (``block_time``, s; default the machine's)."""
+    F above the machine's runs at the machine's), and the length over one block time: a
+    (before, after) pair per block time of ``block_times`` (s)."""
     k = np.concatenate([j, j + 1])
     v = lowest_axis(tp.axis_share, k, np.asarray(machine.max_feed, dtype=np.float64))[0]
     top = np.fmin(np.fmin(tp.feed[k], v), machine.max_path_feed)
-    t_block = machine.interpolation_time if block_time is None else block_time
-    top = np.fmin(top, tp.length[k] / t_block)
-    return top[: j.size], top[j.size :]
+    length = tp.length[k]
+    out = []
+    for t_block in block_times:
+        capped = np.fmin(top, length / t_block)
+        out.append((capped[: j.size], capped[j.size :]))
+    return out
 
 
 def _path_acceleration(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> NDArray:
@@ -501,9 +504,8 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     tangent = None
     phi = beta
     if machine.corner_blending == "linuxcnc":
-        caps = segment_caps(tp, j, machine)
         servo = machine.interpolation_time / LCNC_MIN_SEGMENT_CYCLES
-        kink_caps = segment_caps(tp, j, machine, servo)
+        caps, kink_caps = segment_caps(tp, j, machine, machine.interpolation_time, servo)
         phi, reach_p, reach_n, refused = arc_blend_geometry(tp, j, beta)
         radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(
             tp, j, tit, machine, caps, (phi, reach_p, reach_n), kink_caps
