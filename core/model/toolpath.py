@@ -446,38 +446,39 @@ class ToolPath:
         out[a["idx"]] = np.where(a["ccw"], k, -k)
         return out
 
+    def _arc_curvature_vectors(self, points: NDArray[np.float64], i: NDArray | slice) -> NDArray:
+        """(m, 3) curvature vectors at ``points`` of the arcs ``i`` (rows of the arc table):
+        kappa along the principal normal, which on a helix points from the point to the
+        axis: -r / |r|."""
+        a = self._arc
+        kappa = g.arc_curvature(a["radius"][i], a["pitch"][i])
+        return -g.unit(self._radial(points, a["idx"][i])) * kappa[:, None]
+
     def _curvature_vector(self, points: NDArray[np.float64]) -> NDArray[np.float64]:
         out = np.zeros((self.n, 3))
-        a = self._arc
-        for b in pieces(a["idx"].size):
-            k = a["idx"][b]
-            kappa = g.arc_curvature(a["radius"][b], a["pitch"][b])
-            # A helix's principal normal points from the point to the axis: -r / |r|.
-            out[k] = -g.unit(self._radial(points, k)) * kappa[:, None]
+        idx = self._arc["idx"]
+        for b in pieces(idx.size):
+            out[idx[b]] = self._arc_curvature_vectors(points, b)
         return out
 
     def _curvature_vector_rows(self, points: NDArray[np.float64], lo: int, hi: int) -> NDArray:
         """Rows ``lo:hi`` of :meth:`_curvature_vector` (the same numbers, for those rows
         only)."""
         out = np.zeros((hi - lo, 3))
-        a = self._arc
-        i0, i1 = np.searchsorted(a["idx"], [lo, hi])
-        k = a["idx"][i0:i1]
-        kappa = g.arc_curvature(a["radius"][i0:i1], a["pitch"][i0:i1])
-        out[k - lo] = -g.unit(self._radial(points, k)) * kappa[:, None]
+        idx = self._arc["idx"]
+        i0, i1 = np.searchsorted(idx, [lo, hi])
+        out[idx[i0:i1] - lo] = self._arc_curvature_vectors(points, slice(i0, i1))
         return out
 
     def _curvature_vector_at(self, points: NDArray[np.float64], k: NDArray[np.int64]) -> NDArray:
         """Rows ``k`` (sorted moves) of :meth:`_curvature_vector` (the same numbers, for
         those rows only)."""
         out = np.zeros((k.size, 3))
-        a = self._arc
-        at = np.searchsorted(a["idx"], k)
-        arc = at < a["idx"].size
-        arc[arc] = a["idx"][at[arc]] == k[arc]
-        i = at[arc]
-        kappa = g.arc_curvature(a["radius"][i], a["pitch"][i])
-        out[arc] = -g.unit(self._radial(points, k[arc])) * kappa[:, None]
+        idx = self._arc["idx"]
+        at = np.searchsorted(idx, k)
+        arc = at < idx.size
+        arc[arc] = idx[at[arc]] == k[arc]
+        out[arc] = self._arc_curvature_vectors(points, at[arc])
         return out
 
     @cached_property
