@@ -636,3 +636,39 @@ def test_a_large_share_removed_far_beyond_chance_needs_half_the_floor():
     assert decide([lag(59.5, 33.9, 0.005)], floor=30.0)[1] is None
     assert decide([lag(59.5, 45.0, 0.0)], floor=30.0)[1] is None
     assert decide([lag(30.0, 16.0, 0.0)], floor=30.0)[1] is None
+
+
+def test_the_per_axis_search_also_starts_from_the_defaults(nc):
+    """axis_dynamics is fitted in stages: the uniform scales, then each axis's factors one at
+    a time. Here the calibration data sees the Z axis's acceleration and whether X and Y are
+    alike (a circle), barely their common level: gap = 10 |ln(A_z / 500)| + 0.5 |ln(A_x /
+    2000)| + 100 |ln(A_x / A_y)| (mm/s^2; true machine: X, Y 2000, Z 500).
+
+    From the defaults (all 2000) a uniform scale s costs 10 |ln(4 s)| + 0.5 |ln s|: the
+    coarse grid's least is s = 0.25 (A_z 500: 0.5 ln 4 = 0.69), and from there one axis's
+    factor alone cannot bring X and Y back together (100 |ln(A_x / A_y)|), so a search that
+    only goes on from the uniform fit ends at 0.69 with every axis at a quarter. Started from
+    the defaults as well, accel_z alone reaches 0.25 (refined from the grid's 0.2 / 0.276):
+    gap near 0, X and Y untouched -- the better end, which the fit must return."""
+    from core.diagnosis.fit import fit
+    from core.diagnosis.objective import Objective
+    from core.engine.effects import setup_for
+
+    def cal_gap(preds, data, which):
+        ax, ay, az = preds[0].setup.machine.max_acceleration
+        return (
+            10.0 * abs(math.log(az / 500.0))
+            + 0.5 * abs(math.log(ax / 2000.0))
+            + 100.0 * abs(math.log(ax / ay))
+        )
+
+    objective = Objective("test", "-", "synthetic", cal_gap, lambda preds, data: (None, None))
+    effects = nc.effects()
+    m = machine(acc=(2.0, 2.0, 2.0))
+    tp = path([{"end": (10, 0, 0)}, {"end": (10, 10, -1)}])
+    base = setup_for(m, effects)
+    params, preds = fit(nc.indicators, [tp], base, effects["axis_dynamics"], [], objective)
+    assert params["accel_scale"] == 1.0
+    assert params["accel_x"] == params["accel_y"] == 1.0
+    assert params["accel_z"] == pytest.approx(0.25, rel=0.02)
+    assert cal_gap(preds, [], "calibration") < 0.2
