@@ -63,3 +63,32 @@ def test_first_order_on_columns_is_per_column():
                 [_first_order(np.ascontiguousarray(pos[:, j]), a) for j in range(3)]
             )
             np.testing.assert_array_equal(_first_order(pos, a), cols)
+
+
+def test_projection_lands_between_the_path_samples():
+    """The foot of a point on the path, not the nearest of the 0.05 mm samples (which is up
+    to 25 um off along the path: a 10 mm/s error in the measured speed 25 um before a stop
+    at 2 m/s^2). A line from (0, 0, 0) to (10, 0, 0): the point (1.23456, 0.01, 0) has its
+    foot at s = 1.23456 mm, 0.01 mm away (the nearest sample is at 1.25). A 10 mm line from
+    (-10, 0, 0), then a counter-clockwise half circle of radius 2 about (0, 2, 0): the point
+    at 0.3 rad and radius 2.002 has its foot at s = 10 + 2 x 0.3 = 10.6 mm, 0.002 mm away;
+    between two samples the foot lies on their chord (its sagitta 0.05^2 / (8 x 2) = 0.16 um),
+    its arc length interpolated along the chord: both within 0.2 um (the nearest sample
+    alone: up to 25 um)."""
+    line = polyline(np.array([[0.0, 0.0, 0.0], [10.0, 0.0, 0.0]]), 50.0)
+    samples = line.sample(PROJECTION_STEP)
+    s, d = samples.project_near(np.array([[1.23456, 0.01, 0.0]]), np.array([1.2]))
+    assert abs(s[0] - 1.23456) < 1e-12
+    assert abs(d[0] - 0.01) < 1e-12
+    arc = path(
+        [
+            {"start": (-10.0, 0.0, 0.0), "end": (0.0, 0.0, 0.0)},
+            {"end": (0.0, 4.0, 0.0), "center": (0.0, 2.0, 0.0), "ccw": True},
+        ]
+    )
+    samples = arc.sample(PROJECTION_STEP)
+    phi = 0.3
+    q = np.array([0.0, 2.0, 0.0]) + 2.002 * np.array([np.sin(phi), -np.cos(phi), 0.0])
+    s, d = samples.project_near(q[None, :], np.array([10.5]))
+    assert abs(s[0] - (10.0 + 2.0 * phi)) < 2e-4
+    assert abs(d[0] - 0.002) < 2e-4

@@ -127,9 +127,35 @@ class PathSamples:
                 best_i[rest], best_d2[rest] = self._window(
                     j[rest], qx[rest], qy[rest], qz[rest], guess[rest], half
                 )
-            s[part] = s_p[best_i]
-            dist[part] = np.sqrt(best_d2)
+            s[part], dist[part] = self._between(q[part], best_i, best_d2)
         return s, dist
+
+    def _between(
+        self, q: NDArray[np.float64], i: NDArray[np.int64], d2: NDArray[np.float64]
+    ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        """Arc length and distance of the foot of each of ``q`` on the path between its
+        nearest path point ``i`` (squared distance ``d2``) and the neighbour on either side:
+        the nearer foot on the two chords, its arc length interpolated along the chord. The
+        points are ``step`` apart, and the nearest point alone is up to step / 2 off along
+        the path: 25 um, a 10 mm/s error in the speed 25 um before a stop at 2 m/s^2
+        (sqrt(2 a d)). Where a chord has no length or the foot is not finite, the point."""
+        pts, s_p = self.points, self.s
+        last = s_p.size - 1
+        s = s_p[i]
+        best = d2.copy()
+        for a in (np.maximum(i - 1, 0), i):
+            b = np.minimum(a + 1, last)
+            ab = pts[b] - pts[a]
+            aq = q - pts[a]
+            l2 = np.einsum("ij,ij->i", ab, ab)
+            with np.errstate(invalid="ignore", divide="ignore"):
+                u = np.clip(np.einsum("ij,ij->i", aq, ab) / l2, 0.0, 1.0)
+            e = aq - u[:, None] * ab
+            e2 = np.einsum("ij,ij->i", e, e)
+            better = (l2 > 0.0) & (e2 < best)
+            s = np.where(better, s_p[a] + u * (s_p[b] - s_p[a]), s)
+            best = np.where(better, e2, best)
+        return s, np.sqrt(best)
 
     def _near_first(
         self,
@@ -307,8 +333,7 @@ class PathSamples:
             ds = s_p[cand] - s_guess[part][:, None]
             best = np.argmin(d2 + (TOL.pass_tie * ds) ** 2, axis=1)
             rows = np.arange(best.size)
-            s[part] = s_p[cand[rows, best]]
-            dist[part] = np.sqrt(d2[rows, best])
+            s[part], dist[part] = self._between(q[part], cand[rows, best], d2[rows, best])
         return s, dist
 
 
