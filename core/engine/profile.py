@@ -690,10 +690,14 @@ def _passes_of(
     the sums and the backward pass into, which the rounds keep from pass to pass; ``out``:
     an (n + 1,) array for the speeds, else a new one.)
 
-    ``finite``: the caller knows ``b2`` and the terms to be finite. Then no sum or
-    difference the passes take the minima of is NaN (the sums of terms >= 0 may overflow
-    to inf, never to NaN) nor -0.0 (b2 >= +0, W >= +0), and fmin is minimum there, a
-    third faster."""
+    ``finite``: the caller knows ``b2`` and the terms to be finite and the terms to be
+    >= 0 (:func:`_plain_terms`). Then no sum or difference the passes take the minima of
+    is NaN (the sums of terms >= 0 may overflow to inf, never to NaN) nor -0.0 (b2 >= +0,
+    W >= +0), and fmin is minimum there, a third faster. Nor is a speed squared below 0
+    there, so the last clamp at 0 is left out: W does not fall, so b2[j] - W[j] >= -W[i]
+    for j <= i and the forward speed squared is >= -W[i] + W[i] = +0 (rounding is
+    monotone); the backward one likewise; an overflowed W gives NaN, which the clamp kept
+    too."""
     n1 = b2.size
     w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
     least = np.fmin if finite else np.minimum
@@ -709,8 +713,14 @@ def _passes_of(
     bwd -= w
     np.minimum(fwd, bwd, out=fwd)
     np.minimum(fwd, b2, out=fwd)
-    np.maximum(fwd, 0.0, out=fwd)
+    if not finite:
+        np.maximum(fwd, 0.0, out=fwd)
     return np.sqrt(fwd, out=fwd)
+
+
+def _plain_terms(terms: NDArray) -> bool:
+    """Whether pass terms are finite and >= 0 (``finite`` of :func:`_passes_of`)."""
+    return bool(np.isfinite(terms).all() and not (terms < 0.0).any())
 
 
 def stop_speed(dist: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
@@ -984,12 +994,9 @@ class _Rounds:
         self.b2 = caps * caps
         self.work = (np.empty(caps.size), np.empty(caps.size))
         self.spare: NDArray | None = None  # (see passes)
-        # the squared caps and the terms are finite (see _passes_of)
-        self.finite = bool(
-            np.isfinite(self.b2).all()
-            and np.isfinite(self.term_up).all()
-            and np.isfinite(self.term_dn).all()
-        )
+        # the squared caps are finite and the terms finite and >= 0 (see _passes_of; the
+        # two directions' terms are the same numbers yet)
+        self.finite = bool(np.isfinite(self.b2).all()) and _plain_terms(self.term_up)
         # last round's marks (:meth:`step`): each move's peak, whether it accelerates or
         # brakes, and through[k + 1] (move k links its ramp to the next or previous one),
         # with the boundary speeds they were made from; None before the first round
@@ -1238,7 +1245,7 @@ class _Rounds:
         off[cand] = out != acc[cand]
         terms = _pass_terms(out, self.holds.inner(cand))
         term[cand] = terms
-        if self.finite and not np.isfinite(terms).all():
+        if self.finite and not _plain_terms(terms):
             self.finite = False
         if rising:
             self.step_up = step
