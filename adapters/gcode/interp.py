@@ -173,7 +173,8 @@ class State:
 class Interpreter:
     """Turns the words of one program into a ToolPath (see module docstring)."""
 
-    #: per G-code group and line, its code x 10 (-1: none); after :meth:`_release_words`
+    #: per G-code group and line, its code x 10 (-1: none): a row per group (read-only
+    #: where the program uses none of the group's codes); after :meth:`_release_per_line`
     #: only the rows the columns read, indexed by group all the same
     g: Any
     #: per letter, its value on each line (NaN: absent) and whether it is there
@@ -217,7 +218,9 @@ class Interpreter:
 
     def _single(self, ch: str) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Per active line: the value of letter ``ch`` (NaN if absent); error if twice."""
-        idx = np.flatnonzero(self.w.letter == ord(ch))
+        idx = np.zeros(0, dtype=np.intp)
+        if self.letter_count[ord(ch)]:  # (a letter the program never writes: no search)
+            idx = np.flatnonzero(self.w.letter == ord(ch))
         if idx.size == 0:
             # Read-only views of one value: a letter the program never writes costs nothing.
             return np.broadcast_to(np.nan, (self.na,)), np.broadcast_to(False, (self.na,))
@@ -239,6 +242,7 @@ class Interpreter:
         if w.line.size == 0:
             raise _no_moves(self.src)
         self.al, self.li = _line_index(w.line)
+        self.letter_count = np.bincount(w.letter, minlength=256)  # (words per letter)
         self.na = self.al.size
         self._gcodes()
         self._mcodes()
@@ -278,6 +282,7 @@ class Interpreter:
         if w.line.size == 0:
             return None, init
         self.al, self.li = _line_index(w.line)
+        self.letter_count = np.bincount(w.letter, minlength=256)  # (words per letter)
         self.na = self.al.size
         self._gcodes()
         self._mcodes()
@@ -404,8 +409,17 @@ class Interpreter:
         if dup.size:
             k = gi[modal][order][dup[0] + 1]
             raise self.error(w.line[k], "two G-codes of the same modal group in one block")
-        self.g = np.full((W.N_GROUPS, self.na), -1, dtype=np.int32)  # G-codes x 10 fit
-        self.g[group[modal], li[modal]] = code[modal]
+        # A row per group the program uses (G-codes x 10 fit int32); a group it does not
+        # use reads one row of -1, never written (1M lines: 4 MB a group not filled)
+        none = np.broadcast_to(np.int32(-1), (self.na,))
+        rows = [none] * W.N_GROUPS
+        g_mod, li_mod, code_mod = group[modal], li[modal], code[modal]
+        for grp in np.unique(g_mod).tolist():
+            sel = g_mod == grp
+            row = np.full(self.na, -1, dtype=np.int32)
+            row[li_mod[sel]] = code_mod[sel]
+            rows[grp] = row
+        self.g = rows
         # Codes that only pass: remembered per line for the P/Q checks.
         self.g_pass_line = np.zeros(self.na, dtype=bool)
         self.g_pass_line[li[~modal]] = True
@@ -510,7 +524,11 @@ class Interpreter:
         self._bare_notice = self._decimal_point_args() if self.dialect == "fanuc" else None
         self._o_word_line = self._o_word_mixed()
         # (the S words' lines: a Siemens G4 S is refused in _dwells)
-        self._s_lines = self.w.line[self.w.letter == ord("S")]
+        self._s_lines = (
+            self.w.line[self.w.letter == ord("S")]
+            if self.letter_count[ord("S")]
+            else np.zeros(0, dtype=self.w.line.dtype)
+        )
         self._release_words()
 
         dwell_line = gg[G.DWELL] >= 0
@@ -660,9 +678,9 @@ class Interpreter:
     def _o_word_mixed(self) -> int | None:
         """The first line's word on a block with an O word and other words (other than N),
         if any: found while the words are at hand, reported by :meth:`_check_words`."""
-        o = self.w.letter == ord("O")
-        if not o.any():
+        if not self.letter_count[ord("O")]:
             return None
+        o = self.w.letter == ord("O")
         lines_o = self.li[o]
         others = np.isin(self.li, lines_o) & ~np.isin(self.w.letter, [ord("O"), ord("N")])
         return int(self.w.line[np.argmax(others)]) if others.any() else None
