@@ -129,10 +129,23 @@ _PER_LINE = (
 )
 
 
+#: :func:`ffill` repeats the values set, run by run, where at most one position in this
+#: many is set (a modal code on a few lines of a million: one pass, not five).
+FFILL_SPARSE = 16
+
+
 def ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> NDArray:
     """Forward-fill ``values`` from the positions where ``is_set``; ``initial`` before the first."""
     if not is_set.any():
         return np.full(values.shape, initial, dtype=np.result_type(values, type(initial)))
+    at = np.flatnonzero(is_set)
+    if FFILL_SPARSE * at.size <= values.size:
+        # the runs' values, in the dtype (and with the casts) of the np.where below
+        run = np.empty(at.size + 1, dtype=np.where(True, values[:1], initial).dtype)
+        run[0] = initial
+        run[1:] = values[at]
+        return np.repeat(run, np.diff(at, prepend=0, append=values.size))
+    del at
     idx = np.where(is_set, np.arange(values.size), -1)
     np.maximum.accumulate(idx, out=idx)
     out = values[np.maximum(idx, 0)]
@@ -242,7 +255,6 @@ class Interpreter:
         if w.line.size == 0:
             raise _no_moves(self.src)
         self.al, self.li = _line_index(w.line)
-        self.letter_count = np.bincount(w.letter, minlength=256)  # (words per letter)
         self.na = self.al.size
         self._gcodes()
         self._mcodes()
@@ -282,7 +294,6 @@ class Interpreter:
         if w.line.size == 0:
             return None, init
         self.al, self.li = _line_index(w.line)
-        self.letter_count = np.bincount(w.letter, minlength=256)  # (words per letter)
         self.na = self.al.size
         self._gcodes()
         self._mcodes()
@@ -355,8 +366,10 @@ class Interpreter:
                     int(w.line[np.argmax(motion)]),
                 )
             self._drop(~after)
-        # np.unique(w.letter) without the sort (2M words: 12 ms, not 32)
-        letters = np.flatnonzero(np.bincount(w.letter, minlength=256)).astype(np.uint8)
+        # the words per letter (kept: a letter no word has is not searched for); np.unique
+        # of the letters without the sort (2M words: 12 ms, not 32)
+        self.letter_count = np.bincount(w.letter, minlength=256)
+        letters = np.flatnonzero(self.letter_count).astype(np.uint8)
         for code in letters:
             ch = chr(code)
             if ch in ALLOWED:
