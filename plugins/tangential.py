@@ -90,6 +90,7 @@ from numpy.typing import NDArray
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
 from core.engine.indicators import LCNC_KINK_RATIO, LCNC_MIN_SEGMENT_CYCLES, LCNC_TANGENTIAL_RATIO
 from core.model import geometry as g
+from core.model.arrays import nan_to_num
 from plugins.feed_limit import lowest_axis
 
 NAME = "tangential"
@@ -232,7 +233,7 @@ def _corner_feed(
         v_jerk = np.where(share_t > 0, np.cbrt(machine.max_jerk * R**2 / share_t), inf)
     # inf jerk times a zero radius is NaN: no radius means a stop.
     cand = np.concatenate([v_feed, v_acc, v_jerk], axis=1)
-    np.nan_to_num(cand, copy=False, nan=0.0, posinf=inf)  # (in place: a new array)
+    nan_to_num(cand, copy=False, nan=0.0, posinf=inf)  # (in place: a new array)
     limit = np.argmin(cand, axis=1)
     return cand[np.arange(cand.shape[0]), limit], limit
 
@@ -288,8 +289,8 @@ def linuxcnc_blends(
         kink = np.max(np.abs(t2 - t1) * (a_inst[:, None] / acc[None, :]), axis=1)
     kink = np.where(tp.is_arc[j] | tp.is_arc[j + 1], kink / LCNC_TANGENTIAL_RATIO, kink)
     tangent = kink < LCNC_KINK_RATIO
-    r_geom = np.nan_to_num(np.maximum(r_geom, 0.0), nan=0.0)
-    r_plan = np.where(tangent, 0.0, np.nan_to_num(np.maximum(r_plan, 0.0), nan=0.0))
+    r_geom = nan_to_num(np.maximum(r_geom, 0.0), nan=0.0)
+    r_plan = np.where(tangent, 0.0, nan_to_num(np.maximum(r_plan, 0.0), nan=0.0))
     return r_geom, r_plan, tangent, np.sqrt(a_n * r_geom), axis, kink
 
 
@@ -561,8 +562,8 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             values={
                 "radius_mm": radius,
                 "angle_deg": np.degrees(beta),
-                "hold_mm": np.nan_to_num(inserted * np.tan(phi / 2.0), nan=0.0, posinf=0.0),
-                "travel_mm": np.nan_to_num(inserted * phi / 2.0, nan=0.0, posinf=0.0),
+                "hold_mm": nan_to_num(inserted * np.tan(phi / 2.0), nan=0.0, posinf=0.0),
+                "travel_mm": nan_to_num(inserted * phi / 2.0, nan=0.0, posinf=0.0),
             }
             | extra,
         )

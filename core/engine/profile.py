@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
+from core.model.arrays import nan_to_num
 from core.model.heap import release_free_heap
 from core.model.pieces import pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
@@ -462,7 +463,7 @@ class Profile:
         with np.errstate(divide="ignore", invalid="ignore"):
             h0 = np.where(hs > 0, self.hold_start_ratio[k] * hs / self.v_entry[k], 0.0)
             h1 = np.where(he > 0, self.hold_end_ratio[k] * he / self.v_exit[k], 0.0)
-        return np.nan_to_num(h0, posinf=0.0), np.nan_to_num(h1, posinf=0.0)
+        return nan_to_num(h0, posinf=0.0), nan_to_num(h1, posinf=0.0)
 
     @cached_property
     def lost_time(self) -> NDArray[np.float64]:
@@ -644,10 +645,10 @@ def _holds(ev: Evaluation) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     h_end = np.zeros(tp.n)
     r_start = np.ones(tp.n)
     r_end = np.ones(tp.n)
-    h = np.nan_to_num(ev.junction_hold, nan=0.0, posinf=0.0)
+    h = nan_to_num(ev.junction_hold, nan=0.0, posinf=0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(h > 0, ev.junction_travel / h, 1.0)
-    ratio = np.clip(np.nan_to_num(ratio, nan=1.0), 0.0, 1.0)
+    ratio = np.clip(nan_to_num(ratio, nan=1.0), 0.0, 1.0)
     h_end[ev.junction] = h
     h_start[ev.junction + 1] = h
     r_end[ev.junction] = ratio
