@@ -189,9 +189,13 @@ def corner_feed(
     return _corner_feed(corner_shares(t1, t2), radius, machine)
 
 
-def corner_shares(t1: NDArray[np.float64], t2: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+def corner_shares(
+    t1: NDArray[np.float64], t2: NDArray[np.float64], beta: NDArray[np.float64] | None = None
+) -> tuple[NDArray, NDArray]:
     """The machine-free part of :func:`corner_feed`: (m, 3) every axis's largest share of
-    the tangent and of the normal over the inserted arc of each corner."""
+    the tangent and of the normal over the inserted arc of each corner. ``beta``: (m,) the
+    corners' angles between t1 and t2 where known (``g.angle_between(t1, t2)``, as
+    :attr:`ToolPath.turn_angle` makes them), else made here."""
     m = t1.shape[0]
     if m > CHUNK:
         # Each corner on its own: in pieces, the (m, 9) temporaries stay small (the same
@@ -199,9 +203,12 @@ def corner_shares(t1: NDArray[np.float64], t2: NDArray[np.float64]) -> tuple[NDA
         share_t, share_n = np.empty((m, 3)), np.empty((m, 3))
         for a in range(0, m, CHUNK):
             b = min(a + CHUNK, m)
-            share_t[a:b], share_n[a:b] = corner_shares(t1[a:b], t2[a:b])
+            share_t[a:b], share_n[a:b] = corner_shares(
+                t1[a:b], t2[a:b], None if beta is None else beta[a:b]
+            )
         return share_t, share_n
-    beta = g.angle_between(t1, t2)
+    if beta is None:
+        beta = g.angle_between(t1, t2)
     u = _in_plane_normal(t1, t2)
     b = beta[:, None]
     return g.max_share(t1, u, b), g.max_share(u, -t1, b)
@@ -478,7 +485,10 @@ def _shares_of(tp: ToolPath, j: NDArray[np.int64]) -> tuple[NDArray, NDArray]:
     kept = _SHARES.get(tp)
     if kept is not None and np.array_equal(kept[0], j):
         return kept[1], kept[2]
-    shares = corner_shares(_rows(tp.tangent_end, j), _rows(tp.tangent_start, j + 1))
+    # (the corners' angles are the tool path's turn angles: the same rows, made once)
+    shares = corner_shares(
+        _rows(tp.tangent_end, j), _rows(tp.tangent_start, j + 1), tp.turn_angle[j]
+    )
     if tp in _SEEN:
         _SHARES[tp] = (j, *shares)
     else:
