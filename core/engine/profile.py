@@ -95,12 +95,31 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
     dv = np.asarray(dv, dtype=np.float64)
     a = np.asarray(acc, dtype=np.float64)
     j = np.asarray(jerk, dtype=np.float64)
+    if not (dv.ndim and dv.shape == a.shape == j.shape):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_full = dv / a + a / j
+            t_short = 2.0 * np.sqrt(dv / j)
+            t = np.where(dv >= a * a / j, t_full, t_short)
+            out = dv / t
+        return np.where(np.isfinite(j) & (dv > TOL.nil_speed), out, a)
+    # Columns of one shape (the rounds'): the same operations in the same order, written
+    # over their temporaries.
     with np.errstate(divide="ignore", invalid="ignore"):
-        t_full = dv / a + a / j
-        t_short = 2.0 * np.sqrt(dv / j)
-        t = np.where(dv >= a * a / j, t_full, t_short)
-        out = dv / t
-    return np.where(np.isfinite(j) & (dv > TOL.nil_speed), out, a)
+        t_full = dv / a
+        tmp = a / j
+        t_full += tmp  # dv / a + a / j
+        t_short = np.divide(dv, j, out=tmp)
+        np.sqrt(t_short, out=t_short)
+        t_short *= 2.0  # 2 sqrt(dv / j)
+        lim = a * a
+        lim /= j
+        np.copyto(t_full, t_short, where=~(dv >= lim))  # t: t_full where dv >= A^2 / J
+        del t_short, lim
+        np.divide(dv, t_full, out=t_full)
+        keep = np.isfinite(j)
+        keep &= dv > TOL.nil_speed
+        np.copyto(t_full, a, where=~keep)
+    return t_full
 
 
 def s_curve(
