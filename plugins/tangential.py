@@ -190,12 +190,16 @@ def corner_feed(
 
 
 def corner_shares(
-    t1: NDArray[np.float64], t2: NDArray[np.float64], beta: NDArray[np.float64] | None = None
+    t1: NDArray[np.float64],
+    t2: NDArray[np.float64],
+    turn: NDArray[np.float64] | None = None,
+    at: NDArray[np.int64] | None = None,
 ) -> tuple[NDArray, NDArray]:
     """The machine-free part of :func:`corner_feed`: (m, 3) every axis's largest share of
-    the tangent and of the normal over the inserted arc of each corner. ``beta``: (m,) the
-    corners' angles between t1 and t2 where known (``g.angle_between(t1, t2)``, as
-    :attr:`ToolPath.turn_angle` makes them), else made here."""
+    the tangent and of the normal over the inserted arc of each corner. ``turn``, ``at``:
+    where the corners are the junctions ``at`` of a tool path and ``turn`` its
+    :attr:`ToolPath.turn_angle` (``g.angle_between`` of the same rows), the corners'
+    angles are read from there, else made here."""
     m = t1.shape[0]
     if m > CHUNK:
         # Each corner on its own: in pieces, the (m, 9) temporaries stay small (the same
@@ -204,11 +208,13 @@ def corner_shares(
         for a in range(0, m, CHUNK):
             b = min(a + CHUNK, m)
             share_t[a:b], share_n[a:b] = corner_shares(
-                t1[a:b], t2[a:b], None if beta is None else beta[a:b]
+                t1[a:b], t2[a:b], turn, None if at is None else at[a:b]
             )
         return share_t, share_n
-    if beta is None:
+    if turn is None or at is None:
         beta = g.angle_between(t1, t2)
+    else:
+        beta = turn[at]
     u = _in_plane_normal(t1, t2)
     b = beta[:, None]
     return g.max_share(t1, u, b), g.max_share(u, -t1, b)
@@ -487,7 +493,7 @@ def _shares_of(tp: ToolPath, j: NDArray[np.int64]) -> tuple[NDArray, NDArray]:
         return kept[1], kept[2]
     # (the corners' angles are the tool path's turn angles: the same rows, made once)
     shares = corner_shares(
-        _rows(tp.tangent_end, j), _rows(tp.tangent_start, j + 1), tp.turn_angle[j]
+        _rows(tp.tangent_end, j), _rows(tp.tangent_start, j + 1), tp.turn_angle, j
     )
     if tp in _SEEN:
         _SHARES[tp] = (j, *shares)
