@@ -601,8 +601,17 @@ class Interpreter:
             mm = np.where(gvn, vals[ch], 0.0)
             mm *= self.scale
             abs_set = gvn & absolute
-            csum = np.where(gvn & ~absolute, mm, 0.0)  # the increments, then their sums
-            np.cumsum(csum, out=csum)
+            incremental = gvn & ~absolute
+            # the increments, then their sums; none (a program in G90 throughout): their
+            # sums are +0.0 everywhere, added as the scalar (the same values, -0.0 + 0.0
+            # included), not as an array of zeros
+            csum: NDArray[np.float64] | float = 0.0
+            if incremental.any():
+                sums = np.where(incremental, mm, 0.0)
+                np.cumsum(sums, out=sums)
+                csum = sums
+                del sums
+            del incremental
             last = np.arange(self.na)  # np.where(abs_set, np.arange(na), -1), then its max
             last[~abs_set] = -1
             np.maximum.accumulate(last, out=last)
@@ -611,7 +620,8 @@ class Interpreter:
             none = last < 0
             at = np.maximum(last, 0, out=last)
             base = mm[at]
-            base -= csum[at]
+            if not isinstance(csum, float):
+                base -= csum[at]  # (x - 0.0 is x: nothing to take where there is none)
             base[none] = before
             np.add(base, csum, out=pos[:, axis])
             del mm, csum, last, at, none, base
