@@ -90,6 +90,7 @@ from numpy.typing import NDArray
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
 from core.engine.indicators import LCNC_KINK_RATIO, LCNC_MIN_SEGMENT_CYCLES, LCNC_TANGENTIAL_RATIO
 from core.model import geometry as g
+from core.model.arrays import nan_to_num
 from plugins.feed_limit import lowest_axis
 
 NAME = "tangential"
@@ -188,9 +189,17 @@ def corner_feed(
     return _corner_feed(corner_shares(t1, t2), radius, machine)
 
 
-def corner_shares(t1: NDArray[np.float64], t2: NDArray[np.float64]) -> tuple[NDArray, NDArray]:
+def corner_shares(
+    t1: NDArray[np.float64],
+    t2: NDArray[np.float64],
+    turn: NDArray[np.float64] | None = None,
+    at: NDArray[np.int64] | None = None,
+) -> tuple[NDArray, NDArray]:
     """The machine-free part of :func:`corner_feed`: (m, 3) every axis's largest share of
-    the tangent and of the normal over the inserted arc of each corner."""
+    the tangent and of the normal over the inserted arc of each corner. ``turn``, ``at``:
+    where the corners are the junctions ``at`` of a tool path and ``turn`` its
+    :attr:`ToolPath.turn_angle` (``g.angle_between`` of the same rows), the corners'
+    angles are read from there, else made here."""
     m = t1.shape[0]
     if m > CHUNK:
         # Each corner on its own: in pieces, the (m, 9) temporaries stay small (the same
@@ -198,9 +207,14 @@ def corner_shares(t1: NDArray[np.float64], t2: NDArray[np.float64]) -> tuple[NDA
         share_t, share_n = np.empty((m, 3)), np.empty((m, 3))
         for a in range(0, m, CHUNK):
             b = min(a + CHUNK, m)
-            share_t[a:b], share_n[a:b] = corner_shares(t1[a:b], t2[a:b])
+            share_t[a:b], share_n[a:b] = corner_shares(
+                t1[a:b], t2[a:b], turn, None if at is None else at[a:b]
+            )
         return share_t, share_n
-    beta = g.angle_between(t1, t2)
+    if turn is None or at is None:
+        beta = g.angle_between(t1, t2)
+    else:
+        beta = turn[at]
     u = _in_plane_normal(t1, t2)
     b = beta[:, None]
     return g.max_share(t1, u, b), g.max_share(u, -t1, b)
@@ -232,7 +246,7 @@ def _corner_feed(
         v_jerk = np.where(share_t > 0, np.cbrt(machine.max_jerk * R**2 / share_t), inf)
     # inf jerk times a zero radius is NaN: no radius means a stop.
     cand = np.concatenate([v_feed, v_acc, v_jerk], axis=1)
-    np.nan_to_num(cand, copy=False, nan=0.0, posinf=inf)  # (in place: a new array)
+    nan_to_num(cand, copy=False, nan=0.0, posinf=inf)  # (in place: a new array)
     limit = np.argmin(cand, axis=1)
     return cand[np.arange(cand.shape[0]), limit], limit
 
@@ -288,8 +302,8 @@ def linuxcnc_blends(
         kink = np.max(np.abs(t2 - t1) * (a_inst[:, None] / acc[None, :]), axis=1)
     kink = np.where(tp.is_arc[j] | tp.is_arc[j + 1], kink / LCNC_TANGENTIAL_RATIO, kink)
     tangent = kink < LCNC_KINK_RATIO
-    r_geom = np.nan_to_num(np.maximum(r_geom, 0.0), nan=0.0)
-    r_plan = np.where(tangent, 0.0, np.nan_to_num(np.maximum(r_plan, 0.0), nan=0.0))
+    r_geom = nan_to_num(np.maximum(r_geom, 0.0), nan=0.0)
+    r_plan = np.where(tangent, 0.0, nan_to_num(np.maximum(r_plan, 0.0), nan=0.0))
     return r_geom, r_plan, tangent, np.sqrt(a_n * r_geom), axis, kink
 
 
@@ -477,7 +491,10 @@ def _shares_of(tp: ToolPath, j: NDArray[np.int64]) -> tuple[NDArray, NDArray]:
     kept = _SHARES.get(tp)
     if kept is not None and np.array_equal(kept[0], j):
         return kept[1], kept[2]
-    shares = corner_shares(_rows(tp.tangent_end, j), _rows(tp.tangent_start, j + 1))
+    # (the corners' angles are the tool path's turn angles: the same rows, made once)
+    shares = corner_shares(
+        _rows(tp.tangent_end, j), _rows(tp.tangent_start, j + 1), tp.turn_angle, j
+    )
     if tp in _SEEN:
         _SHARES[tp] = (j, *shares)
     else:
@@ -561,8 +578,8 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             values={
                 "radius_mm": radius,
                 "angle_deg": np.degrees(beta),
-                "hold_mm": np.nan_to_num(inserted * np.tan(phi / 2.0), nan=0.0, posinf=0.0),
-                "travel_mm": np.nan_to_num(inserted * phi / 2.0, nan=0.0, posinf=0.0),
+                "hold_mm": nan_to_num(inserted * np.tan(phi / 2.0), nan=0.0, posinf=0.0),
+                "travel_mm": nan_to_num(inserted * phi / 2.0, nan=0.0, posinf=0.0),
             }
             | extra,
         )

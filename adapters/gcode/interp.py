@@ -129,10 +129,23 @@ _PER_LINE = (
 )
 
 
+#: :func:`ffill` repeats the values set, run by run, where at most one position in this
+#: many is set (a modal code on a few lines of a million: one pass, not five).
+FFILL_SPARSE = 16
+
+
 def ffill(values: NDArray, is_set: NDArray[np.bool_], initial: float | int) -> NDArray:
     """Forward-fill ``values`` from the positions where ``is_set``; ``initial`` before the first."""
     if not is_set.any():
         return np.full(values.shape, initial, dtype=np.result_type(values, type(initial)))
+    at = np.flatnonzero(is_set)
+    if FFILL_SPARSE * at.size <= values.size:
+        # the runs' values, in the dtype (and with the casts) of the np.where below
+        run = np.empty(at.size + 1, dtype=np.where(True, values[:1], initial).dtype)
+        run[0] = initial
+        run[1:] = values[at]
+        return np.repeat(run, np.diff(at, prepend=0, append=values.size))
+    del at
     idx = np.where(is_set, np.arange(values.size), -1)
     np.maximum.accumulate(idx, out=idx)
     out = values[np.maximum(idx, 0)]
@@ -173,7 +186,8 @@ class State:
 class Interpreter:
     """Turns the words of one program into a ToolPath (see module docstring)."""
 
-    #: per G-code group and line, its code x 10 (-1: none); after :meth:`_release_words`
+    #: per G-code group and line, its code x 10 (-1: none): a row per group (read-only
+    #: where the program uses none of the group's codes); after :meth:`_release_per_line`
     #: only the rows the columns read, indexed by group all the same
     g: Any
     #: per letter, its value on each line (NaN: absent) and whether it is there
@@ -217,7 +231,9 @@ class Interpreter:
 
     def _single(self, ch: str) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
         """Per active line: the value of letter ``ch`` (NaN if absent); error if twice."""
-        idx = np.flatnonzero(self.w.letter == ord(ch))
+        idx = np.zeros(0, dtype=np.intp)
+        if self.letter_count[ord(ch)]:  # (a letter the program never writes: no search)
+            idx = np.flatnonzero(self.w.letter == ord(ch))
         if idx.size == 0:
             # Read-only views of one value: a letter the program never writes costs nothing.
             return np.broadcast_to(np.nan, (self.na,)), np.broadcast_to(False, (self.na,))
@@ -350,8 +366,10 @@ class Interpreter:
                     int(w.line[np.argmax(motion)]),
                 )
             self._drop(~after)
-        # np.unique(w.letter) without the sort (2M words: 12 ms, not 32)
-        letters = np.flatnonzero(np.bincount(w.letter, minlength=256)).astype(np.uint8)
+        # the words per letter (kept: a letter no word has is not searched for); np.unique
+        # of the letters without the sort (2M words: 12 ms, not 32)
+        self.letter_count = np.bincount(w.letter, minlength=256)
+        letters = np.flatnonzero(self.letter_count).astype(np.uint8)
         for code in letters:
             ch = chr(code)
             if ch in ALLOWED:
@@ -404,8 +422,17 @@ class Interpreter:
         if dup.size:
             k = gi[modal][order][dup[0] + 1]
             raise self.error(w.line[k], "two G-codes of the same modal group in one block")
-        self.g = np.full((W.N_GROUPS, self.na), -1, dtype=np.int32)  # G-codes x 10 fit
-        self.g[group[modal], li[modal]] = code[modal]
+        # A row per group the program uses (G-codes x 10 fit int32); a group it does not
+        # use reads one row of -1, never written (1M lines: 4 MB a group not filled)
+        none = np.broadcast_to(np.int32(-1), (self.na,))
+        rows = [none] * W.N_GROUPS
+        g_mod, li_mod, code_mod = group[modal], li[modal], code[modal]
+        for grp in np.unique(g_mod).tolist():
+            sel = g_mod == grp
+            row = np.full(self.na, -1, dtype=np.int32)
+            row[li_mod[sel]] = code_mod[sel]
+            rows[grp] = row
+        self.g = rows
         # Codes that only pass: remembered per line for the P/Q checks.
         self.g_pass_line = np.zeros(self.na, dtype=bool)
         self.g_pass_line[li[~modal]] = True
@@ -510,7 +537,11 @@ class Interpreter:
         self._bare_notice = self._decimal_point_args() if self.dialect == "fanuc" else None
         self._o_word_line = self._o_word_mixed()
         # (the S words' lines: a Siemens G4 S is refused in _dwells)
-        self._s_lines = self.w.line[self.w.letter == ord("S")]
+        self._s_lines = (
+            self.w.line[self.w.letter == ord("S")]
+            if self.letter_count[ord("S")]
+            else np.zeros(0, dtype=self.w.line.dtype)
+        )
         self._release_words()
 
         dwell_line = gg[G.DWELL] >= 0
@@ -570,8 +601,17 @@ class Interpreter:
             mm = np.where(gvn, vals[ch], 0.0)
             mm *= self.scale
             abs_set = gvn & absolute
-            csum = np.where(gvn & ~absolute, mm, 0.0)  # the increments, then their sums
-            np.cumsum(csum, out=csum)
+            incremental = gvn & ~absolute
+            # the increments, then their sums; none (a program in G90 throughout): their
+            # sums are +0.0 everywhere, added as the scalar (the same values, -0.0 + 0.0
+            # included), not as an array of zeros
+            csum: NDArray[np.float64] | float = 0.0
+            if incremental.any():
+                sums = np.where(incremental, mm, 0.0)
+                np.cumsum(sums, out=sums)
+                csum = sums
+                del sums
+            del incremental
             last = np.arange(self.na)  # np.where(abs_set, np.arange(na), -1), then its max
             last[~abs_set] = -1
             np.maximum.accumulate(last, out=last)
@@ -580,7 +620,8 @@ class Interpreter:
             none = last < 0
             at = np.maximum(last, 0, out=last)
             base = mm[at]
-            base -= csum[at]
+            if not isinstance(csum, float):
+                base -= csum[at]  # (x - 0.0 is x: nothing to take where there is none)
             base[none] = before
             np.add(base, csum, out=pos[:, axis])
             del mm, csum, last, at, none, base
@@ -660,9 +701,9 @@ class Interpreter:
     def _o_word_mixed(self) -> int | None:
         """The first line's word on a block with an O word and other words (other than N),
         if any: found while the words are at hand, reported by :meth:`_check_words`."""
-        o = self.w.letter == ord("O")
-        if not o.any():
+        if not self.letter_count[ord("O")]:
             return None
+        o = self.w.letter == ord("O")
         lines_o = self.li[o]
         others = np.isin(self.li, lines_o) & ~np.isin(self.w.letter, [ord("O"), ord("N")])
         return int(self.w.line[np.argmax(others)]) if others.any() else None

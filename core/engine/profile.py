@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
+from core.model.arrays import nan_to_num
 from core.model.heap import release_free_heap
 from core.model.pieces import pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
@@ -94,12 +95,31 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
     dv = np.asarray(dv, dtype=np.float64)
     a = np.asarray(acc, dtype=np.float64)
     j = np.asarray(jerk, dtype=np.float64)
+    if not (dv.ndim and dv.shape == a.shape == j.shape):
+        with np.errstate(divide="ignore", invalid="ignore"):
+            t_full = dv / a + a / j
+            t_short = 2.0 * np.sqrt(dv / j)
+            t = np.where(dv >= a * a / j, t_full, t_short)
+            out = dv / t
+        return np.where(np.isfinite(j) & (dv > TOL.nil_speed), out, a)
+    # Columns of one shape (the rounds'): the same operations in the same order, written
+    # over their temporaries.
     with np.errstate(divide="ignore", invalid="ignore"):
-        t_full = dv / a + a / j
-        t_short = 2.0 * np.sqrt(dv / j)
-        t = np.where(dv >= a * a / j, t_full, t_short)
-        out = dv / t
-    return np.where(np.isfinite(j) & (dv > TOL.nil_speed), out, a)
+        t_full = dv / a
+        tmp = a / j
+        t_full += tmp  # dv / a + a / j
+        t_short = np.divide(dv, j, out=tmp)
+        np.sqrt(t_short, out=t_short)
+        t_short *= 2.0  # 2 sqrt(dv / j)
+        lim = a * a
+        lim /= j
+        np.copyto(t_full, t_short, where=~(dv >= lim))  # t: t_full where dv >= A^2 / J
+        del t_short, lim
+        np.divide(dv, t_full, out=t_full)
+        keep = np.isfinite(j)
+        keep &= dv > TOL.nil_speed
+        np.copyto(t_full, a, where=~keep)
+    return t_full
 
 
 def s_curve(
@@ -462,7 +482,7 @@ class Profile:
         with np.errstate(divide="ignore", invalid="ignore"):
             h0 = np.where(hs > 0, self.hold_start_ratio[k] * hs / self.v_entry[k], 0.0)
             h1 = np.where(he > 0, self.hold_end_ratio[k] * he / self.v_exit[k], 0.0)
-        return np.nan_to_num(h0, posinf=0.0), np.nan_to_num(h1, posinf=0.0)
+        return nan_to_num(h0, posinf=0.0), nan_to_num(h1, posinf=0.0)
 
     @cached_property
     def lost_time(self) -> NDArray[np.float64]:
@@ -644,10 +664,10 @@ def _holds(ev: Evaluation) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     h_end = np.zeros(tp.n)
     r_start = np.ones(tp.n)
     r_end = np.ones(tp.n)
-    h = np.nan_to_num(ev.junction_hold, nan=0.0, posinf=0.0)
+    h = nan_to_num(ev.junction_hold, nan=0.0, posinf=0.0)
     with np.errstate(divide="ignore", invalid="ignore"):
         ratio = np.where(h > 0, ev.junction_travel / h, 1.0)
-    ratio = np.clip(np.nan_to_num(ratio, nan=1.0), 0.0, 1.0)
+    ratio = np.clip(nan_to_num(ratio, nan=1.0), 0.0, 1.0)
     h_end[ev.junction] = h
     h_start[ev.junction + 1] = h
     r_end[ev.junction] = ratio
@@ -690,10 +710,14 @@ def _passes_of(
     the sums and the backward pass into, which the rounds keep from pass to pass; ``out``:
     an (n + 1,) array for the speeds, else a new one.)
 
-    ``finite``: the caller knows ``b2`` and the terms to be finite. Then no sum or
-    difference the passes take the minima of is NaN (the sums of terms >= 0 may overflow
-    to inf, never to NaN) nor -0.0 (b2 >= +0, W >= +0), and fmin is minimum there, a
-    third faster."""
+    ``finite``: the caller knows ``b2`` and the terms to be finite and the terms to be
+    >= 0 (:func:`_plain_terms`). Then no sum or difference the passes take the minima of
+    is NaN (the sums of terms >= 0 may overflow to inf, never to NaN) nor -0.0 (b2 >= +0,
+    W >= +0), and fmin is minimum there, a third faster. Nor is a speed squared below 0
+    there, so the last clamp at 0 is left out: W does not fall, so b2[j] - W[j] >= -W[i]
+    for j <= i and the forward speed squared is >= -W[i] + W[i] = +0 (rounding is
+    monotone); the backward one likewise; an overflowed W gives NaN, which the clamp kept
+    too."""
     n1 = b2.size
     w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
     least = np.fmin if finite else np.minimum
@@ -709,8 +733,14 @@ def _passes_of(
     bwd -= w
     np.minimum(fwd, bwd, out=fwd)
     np.minimum(fwd, b2, out=fwd)
-    np.maximum(fwd, 0.0, out=fwd)
+    if not finite:
+        np.maximum(fwd, 0.0, out=fwd)
     return np.sqrt(fwd, out=fwd)
+
+
+def _plain_terms(terms: NDArray) -> bool:
+    """Whether pass terms are finite and >= 0 (``finite`` of :func:`_passes_of`)."""
+    return bool(np.isfinite(terms).all() and not (terms < 0.0).any())
 
 
 def stop_speed(dist: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
@@ -984,12 +1014,9 @@ class _Rounds:
         self.b2 = caps * caps
         self.work = (np.empty(caps.size), np.empty(caps.size))
         self.spare: NDArray | None = None  # (see passes)
-        # the squared caps and the terms are finite (see _passes_of)
-        self.finite = bool(
-            np.isfinite(self.b2).all()
-            and np.isfinite(self.term_up).all()
-            and np.isfinite(self.term_dn).all()
-        )
+        # the squared caps are finite and the terms finite and >= 0 (see _passes_of; the
+        # two directions' terms are the same numbers yet)
+        self.finite = bool(np.isfinite(self.b2).all()) and _plain_terms(self.term_up)
         # last round's marks (:meth:`step`): each move's peak, whether it accelerates or
         # brakes, and through[k + 1] (move k links its ramp to the next or previous one),
         # with the boundary speeds they were made from; None before the first round
@@ -1238,7 +1265,7 @@ class _Rounds:
         off[cand] = out != acc[cand]
         terms = _pass_terms(out, self.holds.inner(cand))
         term[cand] = terms
-        if self.finite and not np.isfinite(terms).all():
+        if self.finite and not _plain_terms(terms):
             self.finite = False
         if rising:
             self.step_up = step

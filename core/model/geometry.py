@@ -93,12 +93,27 @@ def max_share(a: ArrayLike, b: ArrayLike, sweep: ArrayLike) -> NDArray[np.float6
     np.add(phi, np.pi, out=phi, where=below)
     inside = phi <= sweep
     del phi, below
-    out = np.maximum(np.abs(a), np.abs(a * np.cos(sweep) + b * np.sin(sweep)))
+    # max(|a|, |a cos(sweep) + b sin(sweep)|), its temporaries written over
+    out = a * np.cos(sweep)
+    turned = b * np.sin(sweep)
+    if turned.shape == out.shape:
+        out += turned
+    else:
+        out = out + turned
+    del turned
+    np.abs(out, out=out)
+    np.maximum(np.abs(a), out, out=out)
     # the peak sqrt(a^2 + b^2) only where it is the answer
-    k = np.nonzero(inside)
-    if k[0].size:
+    if a.shape == b.shape == out.shape and a.flags.c_contiguous and b.flags.c_contiguous:
+        # (the same elements by their flat indices: 2-D indices cost several times more)
+        k = np.flatnonzero(inside)
+        if k.size:
+            out.reshape(-1)[k] = np.hypot(a.reshape(-1)[k], b.reshape(-1)[k])
+        return out
+    k2 = np.nonzero(inside)
+    if k2[0].size:
         a, b = np.broadcast_arrays(a, b, sweep)[:2]
-        out[k] = np.hypot(a[k], b[k])
+        out[k2] = np.hypot(a[k2], b[k2])
     return out
 
 

@@ -16,6 +16,7 @@ from numpy.typing import NDArray
 
 from core.engine.indicators import REDUCTION_LABELS, Evaluation, reduction_class
 from core.engine.profile import Profile, build_profile
+from core.model.arrays import nan_to_num
 from core.model.heap import release_free_heap
 from core.model.pieces import piecewise
 from core.model.toolpath import ToolPath
@@ -121,7 +122,7 @@ def length_class(ev: Evaluation) -> NDArray[np.int8]:
 
     def cls(b: slice) -> NDArray[np.int8]:
         ratio = tp.length[b] / ev.min_length[b]
-        c = np.searchsorted(edges, np.nan_to_num(ratio, nan=np.inf), side="right")
+        c = np.searchsorted(edges, nan_to_num(ratio, nan=np.inf), side="right")
         return np.where(tp.is_feed[b], c.astype(np.int8), -1).astype(np.int8)
 
     return piecewise(tp.n, np.int8, cls)  # (in pieces: no (n,) temporaries)
@@ -148,7 +149,7 @@ def speed_class(share: NDArray[np.floating], is_feed: NDArray[np.bool_]) -> NDAr
     """Reduction class 0..5 of ``1 - share`` (a :func:`speed_share`), -1 for rapids."""
 
     def f(b: slice) -> NDArray[np.int8]:
-        cls = reduction_class(1.0 - np.nan_to_num(share[b], nan=1.0))
+        cls = reduction_class(1.0 - nan_to_num(share[b], nan=1.0))
         return np.where(is_feed[b], cls, -1).astype(np.int8)
 
     return piecewise(share.shape[0], np.int8, f)  # (in pieces: no (n,) temporaries)
@@ -167,7 +168,7 @@ def build_annotations(
     mc = piecewise(  # (in pieces: no (n,) temporaries)
         tp.n,
         np.int8,
-        lambda b: np.where(feed[b], reduction_class(np.nan_to_num(er[b])), -1),
+        lambda b: np.where(feed[b], reduction_class(nan_to_num(er[b])), -1),
     )
     share = speed_share(profile)
     counts = []

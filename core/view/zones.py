@@ -11,6 +11,7 @@ from numpy.typing import NDArray
 
 from core.engine.indicators import Evaluation
 from core.engine.profile import Profile
+from core.model.arrays import nan_to_num
 from core.model.pieces import pieces
 
 #: A junction or block is a slow point of a zone when its predicted feed is at least
@@ -237,7 +238,7 @@ def _zones(ev: Evaluation, profile: Profile, count: int | None):
         return js, zone_of[jm] + fast[jm], ev.junction_feed[js] / ev.junction_programmed[js]
 
     def e_points(b: slice) -> tuple[NDArray[np.int64], NDArray[np.int64], NDArray[np.float64]]:
-        es = np.flatnonzero(feed[b] & (np.nan_to_num(er[b]) >= ZONE_THRESHOLD))
+        es = np.flatnonzero(feed[b] & (nan_to_num(er[b]) >= ZONE_THRESHOLD))
         es += b.start
         return es, zone_of[es] + fast[es], ev.element_feed[es] / tp.feed[es]
 
