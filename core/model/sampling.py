@@ -18,7 +18,8 @@ from core.model.tolerances import TOL
 
 #: Path sampling step (mm) for projecting points on the path: measured samples
 #: (:mod:`core.diagnosis.align`) and filtered predictions (:mod:`core.engine.predict`).
-#: 0.05 mm keeps the nearest point within 25 um of the true projection.
+#: 0.05 mm keeps the nearest point within 25 um of the true projection; the foot on the
+#: chords next to it (:meth:`PathSamples.project_near`) closes the rest.
 PROJECTION_STEP = 0.05
 #: Rows per block when projecting (bounded temporaries: rows x window x 3 floats).
 PROJECT_BLOCK = 8192
@@ -74,9 +75,10 @@ class PathSamples:
     def project_near(
         self, q: ArrayLike, s_guess: ArrayLike, half_width: float = 1.0
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-        """Arc length and distance of the nearest path point to each of ``q`` among those
-        within +-``half_width`` mm of arc length of its guess: the guess decides which pass
-        of the path, the projection where on it.
+        """Arc length and distance of the projection of each of ``q`` on the path: the
+        nearest path point among those within +-``half_width`` mm of arc length of its
+        guess (the guess decides which pass of the path, the projection where on it), then
+        the foot on the nearer of the two chords next to it (:meth:`_between`).
 
         Parameters
         ----------
