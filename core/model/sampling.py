@@ -141,19 +141,27 @@ class PathSamples:
         points are ``step`` apart, and the nearest point alone is up to step / 2 off along
         the path: 25 um, a 10 mm/s error in the speed 25 um before a stop at 2 m/s^2
         (sqrt(2 a d)). Where a chord has no length or the foot is not finite, the point."""
-        pts, s_p = self.points, self.s
+        s_p = self.s
         last = s_p.size - 1
+        px, py, pz = self._columns
+        qx, qy, qz = q[:, 0], q[:, 1], q[:, 2]
         s = s_p[i]
         best = d2.copy()
         for a in (np.maximum(i - 1, 0), i):
             b = np.minimum(a + 1, last)
-            ab = pts[b] - pts[a]
-            aq = q - pts[a]
-            l2 = np.einsum("ij,ij->i", ab, ab)
+            # (column by column; each sum of three in the order numpy's einsum over the rows
+            # takes, (x + z) + y, so that the arc lengths are those of the rows' einsum)
+            ax, ay, az = px[a], py[a], pz[a]
+            abx, aby, abz = px[b] - ax, py[b] - ay, pz[b] - az
+            aqx, aqy, aqz = qx - ax, qy - ay, qz - az
+            l2 = (abx * abx + abz * abz) + aby * aby
             with np.errstate(invalid="ignore", divide="ignore"):
-                u = np.clip(np.einsum("ij,ij->i", aq, ab) / l2, 0.0, 1.0)
-            e = aq - u[:, None] * ab
-            e2 = np.einsum("ij,ij->i", e, e)
+                u = ((aqx * abx + aqz * abz) + aqy * aby) / l2
+            np.clip(u, 0.0, 1.0, out=u)
+            aqx -= u * abx
+            aqy -= u * aby
+            aqz -= u * abz
+            e2 = (aqx * aqx + aqz * aqz) + aqy * aqy
             better = (l2 > 0.0) & (e2 < best)
             s = np.where(better, s_p[a] + u * (s_p[b] - s_p[a]), s)
             best = np.where(better, e2, best)
