@@ -8,7 +8,7 @@ import pytest
 
 from core.engine import profile as profile_module
 from core.engine.profile import build_profile
-from core.model.arrays import isin, put_where, unique
+from core.model.arrays import isin, put_where, select, unique
 from core.model.machine import resolve_machine
 from core.model.toolpath import ExtractOptions
 
@@ -35,7 +35,7 @@ def test_unique_and_isin_are_numpys():
     assert np.array_equal(isin(grid, [1, 2]), np.isin(grid, [1, 2]))
 
 
-def test_put_where_is_copyto():
+def test_put_where_and_select_are_copyto_and_where():
     rng = np.random.default_rng(7)
     for share in (0.0, 0.02, 0.5, 1.0):
         dst = rng.normal(size=1000)
@@ -47,6 +47,10 @@ def test_put_where_is_copyto():
         np.copyto(want, -1.5, where=~where)
         got = put_where(put_where(dst.copy(), src, where), -1.5, ~where)
         assert got.tobytes() == want.tobytes()
+        src[::9] = np.nan
+        dst[::11] = -0.0
+        want = np.where(where, src, dst)
+        assert select(where, src.copy(), dst.copy()).tobytes() == want.tobytes()
 
 
 def _short_blocks(tmp_path) -> str:

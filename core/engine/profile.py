@@ -55,7 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
-from core.model.arrays import isin, nan_to_num, put_where
+from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
 from core.model.pieces import pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
@@ -116,13 +116,13 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
         t_short *= 2.0  # 2 sqrt(dv / j)
         lim = a * a
         lim /= j
-        put_where(t_full, t_short, ~(dv >= lim))  # t: t_full where dv >= A^2 / J
-        del t_short, lim
-        np.divide(dv, t_full, out=t_full)
+        t = select(dv >= lim, t_full, t_short)  # t_full where dv >= A^2 / J
+        del t_full, t_short, lim
+        np.divide(dv, t, out=t)
         keep = np.isfinite(j)
         keep &= dv > TOL.nil_speed
-        put_where(t_full, a, ~keep)
-    return t_full
+        put_where(t, a, ~keep)
+    return t
 
 
 def s_curve(
@@ -1152,7 +1152,24 @@ class _Rounds:
                 f = np.greater(pk, li, out=fall[s])
                 # the cruise length (_moves' d_cr) of the moves that only accelerate or only
                 # brake: through their end or from their start if it is nil
-                x = np.flatnonzero(np.not_equal(r, f, out=one[:m]))
+                only = np.not_equal(r, f, out=one[:m])
+                if DENSE_SHARE * np.count_nonzero(only) > m:  # most of them: whole columns
+                    # (2 L - (peak^2 - v0^2) / a_up - ... as below, over every move)
+                    pk2 = pk * pk
+                    np.subtract(pk2, q[:-1], out=t)
+                    t /= 2 * a_up[s]
+                    d_cr = between[s] - t
+                    np.subtract(pk2, q[1:], out=t)
+                    t /= 2 * a_dn[s]
+                    d_cr -= t
+                    np.maximum(d_cr, 0.0, out=d_cr)
+                    flat = d_cr <= TOL.nil_distance
+                    flat &= only
+                    u = slice(s.start + 1, s.stop + 1)
+                    np.logical_and(r, flat, out=through_up[u])
+                    np.logical_and(f, flat, out=through_dn[u])
+                    continue
+                x = np.flatnonzero(only)
                 if x.size == 0:
                     continue
                 px = pk[x]
@@ -1499,7 +1516,10 @@ def _chain_dv(rising, phase, through, v0, v1, peak) -> NDArray:
     """(n,) the speed change of each move's ramp, as :meth:`_Rounds._ramp_dv` makes it for
     the moves in a ramp ``phase`` (any value elsewhere): the moves run in chains (a move
     continuing the one before, see :meth:`_Rounds._everywhere`) and the moves outside a
-    phase one by one, each run's value from its first and last move, repeated over it."""
+    phase one by one; a chain's change is from its first move's lower speed to its last
+    move's upper one (rising: v0 of the first to v1 or the peak of the last; falling: v0
+    or the peak of the first to v1 of the last). Every move first as a chain of its own
+    (elementwise), then the chains of several moves from their ends, repeated over them."""
     n = phase.size
     # cont[k]: move k continues the chain of move k - 1 (cont[n]: no move there)
     cont = np.zeros(n + 1, dtype=bool)
@@ -1509,26 +1529,24 @@ def _chain_dv(rising, phase, through, v0, v1, peak) -> NDArray:
         c = cont[1:n]
         np.logical_and(through[2:], phase[1:], out=c)
         c &= phase[:-1]
-    if not cont.any():  # every run a move of its own: no gathers
+    # the upper speed at the ramp's end of each move (rising: its end, falling: its start)
+    upper = peak.copy()
+    put_where(upper, v1 if rising else v0, through[1:])
+    lower = v0 if rising else v1
+    dv = upper - lower
+    multi = cont[:n] | cont[1:]  # in a chain of several moves
+    at = np.flatnonzero(multi)
+    if at.size:
+        first = at[~cont[at]]
+        last = at[~cont[at + 1]]
         if rising:
-            hi = np.where(through[1:], v1, peak)
-            hi -= v0
+            hi = upper[last]
+            hi -= lower[first]
         else:
-            hi = np.where(through[1:], v0, peak)
-            hi -= v1
-        return hi
-    first = np.flatnonzero(~cont[:n])
-    last = np.empty(first.size, dtype=first.dtype)
-    last[:-1] = first[1:]
-    last[-1] = n
-    last -= 1
-    if rising:
-        hi = np.where(through[last + 1], v1[last], peak[last])
-        hi -= v0[first]
-    else:
-        hi = np.where(through[first + 1], v0[first], peak[first])
-        hi -= v1[last]
-    return np.repeat(hi, last - first + 1)
+            hi = upper[first]
+            hi -= lower[last]
+        dv[at] = np.repeat(hi, last - first + 1)
+    return dv
 
 
 def _damped(

@@ -41,6 +41,15 @@ def put_where(dst: NDArray, src: NDArray | float, where: NDArray) -> NDArray:
     return dst
 
 
+def select(cond: NDArray, x: NDArray, y: NDArray) -> NDArray:
+    """``np.where(cond, x, y)`` of 1-d float arrays that are the caller's scratch, written
+    into one of them (returned): the side ``cond`` picks less often goes through its
+    indices (:func:`put_where`), so a mask that is nearly all one way costs little."""
+    if 2 * np.count_nonzero(cond) >= cond.size:
+        return put_where(x, y, ~cond)
+    return put_where(y, x, cond)
+
+
 def unique(x: ArrayLike) -> NDArray:
     """``np.unique(x)`` (flattened, sorted, each value once) of an integer or bool array,
     the same array: numpy 2.4's own imports ``numpy.ma`` on its first call, to ask whether
