@@ -237,22 +237,16 @@ def _corner_feed(
     share_t, share_n = shares
     R = radius[:, None]
     inf = np.inf
-    # The three limits per axis side by side, each written into its columns.
-    cand = np.empty((m, 9))
-    v_feed, v_acc, v_jerk = cand[:, 0:3], cand[:, 3:6], cand[:, 6:9]
-    # An axis with no share over the arc sets no limit (inf there: put by index).
-    no_t = np.nonzero(~(share_t > 0))
+    # An axis with no share over the arc sets no limit.
     with np.errstate(divide="ignore", invalid="ignore"):
-        np.divide(machine.max_feed, share_t, out=v_feed)
-        v_feed[no_t] = inf
+        v_feed = np.where(share_t > 0, machine.max_feed / share_t, inf)
         # The normal acceleration may use only a share of A (an effect; 1 in the paper).
         a_n = machine.max_acceleration * machine.normal_acceleration_factor
-        np.sqrt(a_n * R / share_n, out=v_acc)
-        v_acc[np.nonzero(~(share_n > 0))] = inf
-        np.cbrt(machine.max_jerk * R**2 / share_t, out=v_jerk)
-        v_jerk[no_t] = inf
+        v_acc = np.where(share_n > 0, np.sqrt(a_n * R / share_n), inf)
+        v_jerk = np.where(share_t > 0, np.cbrt(machine.max_jerk * R**2 / share_t), inf)
     # inf jerk times a zero radius is NaN: no radius means a stop.
-    nan_to_num(cand, copy=False, nan=0.0, posinf=inf)  # (in place)
+    cand = np.concatenate([v_feed, v_acc, v_jerk], axis=1)
+    nan_to_num(cand, copy=False, nan=0.0, posinf=inf)  # (in place: a new array)
     limit = np.argmin(cand, axis=1)
     return cand[np.arange(cand.shape[0]), limit], limit
 

@@ -87,13 +87,12 @@ def max_share(a: ArrayLike, b: ArrayLike, sweep: ArrayLike) -> NDArray[np.float6
     # phi0 mod pi: atan2 is in [-pi, pi], where np.mod(phi, pi) is phi + pi below 0 (fmod
     # leaves phi as it is; one rounded addition), 0 at pi and phi elsewhere -- its values,
     # several times faster
-    phi = np.arctan2(b, a, order="C")
-    flat = phi.reshape(-1)  # (a view: C order)
-    below = np.flatnonzero(flat < 0)  # (by index: numpy's masked add walks the mask)
-    flat[flat == np.pi] = 0.0
-    flat[below] += np.pi
+    phi = np.arctan2(b, a)
+    below = phi < 0
+    phi[phi == np.pi] = 0.0
+    np.add(phi, np.pi, out=phi, where=below)
     inside = phi <= sweep
-    del phi, flat, below
+    del phi, below
     # max(|a|, |a cos(sweep) + b sin(sweep)|), its temporaries written over
     out = a * np.cos(sweep)
     turned = b * np.sin(sweep)
