@@ -142,3 +142,21 @@ def test_passes_in_pieces_are_the_whole_columns_passes(n):
             got = profile_module._passes_of(b2, up, dn, finite=False)
             want = _passes_whole(b2, up, dn, False)
         assert got.tobytes() == want.tobytes()
+
+
+def test_effective_acceleration_only_is_acc_outside():
+    rng = np.random.default_rng(11)
+    n = 5000
+    dv = rng.uniform(0, 300, n)
+    dv[::13] = 0.0
+    acc = rng.uniform(100, 3000, n)
+    jerk = rng.uniform(1e3, 1e5, n)
+    jerk[::17] = np.inf
+    only = rng.random(n) < 0.7
+    want = np.where(only, profile_module.effective_acceleration(dv, acc, jerk), acc)
+    got = profile_module.effective_acceleration(dv, acc, jerk, only)
+    assert got.tobytes() == want.tobytes()
+    # broadcast inputs take numpy's way, with the same answer
+    got = profile_module.effective_acceleration(dv, acc[:1], jerk[:1], only)
+    want = np.where(only, profile_module.effective_acceleration(dv, acc[:1], jerk[:1]), acc[0])
+    assert got.tobytes() == want.tobytes()

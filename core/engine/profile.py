@@ -80,7 +80,9 @@ CHAIN_WINDOW = 64
 DENSE_SHARE = 4
 
 
-def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
+def effective_acceleration(
+    dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike, only: NDArray[np.bool_] | None = None
+) -> NDArray[np.float64]:
     """A_eff = dv / T of S-curve speed changes (mm/s^2).
 
     Parameters
@@ -89,11 +91,14 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
         Speed change of the ramp (>= 0).
     acc, jerk : (m,) float
         Tangential acceleration (mm/s^2) and jerk (mm/s^3, may be inf).
+    only : (m,) bool, optional
+        The changes that are ramps: ``acc`` elsewhere, put with the other moves that keep
+        it (the rounds' targets in one pass).
 
     Returns
     -------
     (m,) float, mm/s^2
-        ``acc`` where the jerk is infinite or the change is nil.
+        ``acc`` where the jerk is infinite or the change is nil (or not ``only``).
     """
     dv = np.asarray(dv, dtype=np.float64)
     a = np.asarray(acc, dtype=np.float64)
@@ -104,7 +109,8 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
             t_short = 2.0 * np.sqrt(dv / j)
             t = np.where(dv >= a * a / j, t_full, t_short)
             out = dv / t
-        return np.where(np.isfinite(j) & (dv > TOL.nil_speed), out, a)
+        keep = np.isfinite(j) & (dv > TOL.nil_speed)
+        return np.where(keep if only is None else keep & only, out, a)
     # Columns of one shape (the rounds'): the same operations in the same order, written
     # over their temporaries.
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -121,6 +127,8 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
         np.divide(dv, t, out=t)
         keep = np.isfinite(j)
         keep &= dv > TOL.nil_speed
+        if only is not None:
+            keep &= only
         put_where(t, a, ~keep)
     return t
 
@@ -1350,8 +1358,7 @@ class _Rounds:
         finite = self.finite
         for s in pieces(n, CACHE_PIECE):
             od = a[s]  # (a view: written where the acceleration moves)
-            new = effective_acceleration(dv[s], acc[s], jerk[s])
-            put_where(new, acc[s], ~phase[s])  # the targets
+            new = effective_acceleration(dv[s], acc[s], jerk[s], phase[s])  # the targets
             ls = last[s]
             back = new > od
             back &= ls < 0
