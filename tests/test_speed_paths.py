@@ -100,50 +100,6 @@ def test_dense_rounds_give_the_sparse_rounds_bits(nc, tmp_path, monkeypatch, pre
         assert got == runs[0, kw], (share, kw)
 
 
-def _passes_whole(b2, up, dn, finite):
-    """The passes over whole columns at once (as before the pieces)."""
-    n1 = b2.size
-    w, bwd = np.empty(n1), np.empty(n1)
-    least = np.fmin if finite else np.minimum
-    w[0] = 0.0
-    np.cumsum(up, out=w[1:])
-    fwd = np.subtract(b2, w)
-    least.accumulate(fwd, out=fwd)
-    fwd += w
-    np.cumsum(dn, out=w[1:])
-    np.add(b2, w, out=bwd)
-    rev = bwd[::-1]
-    least.accumulate(rev, out=rev)
-    bwd -= w
-    np.minimum(fwd, bwd, out=fwd)
-    np.minimum(fwd, b2, out=fwd)
-    if not finite:
-        np.maximum(fwd, 0.0, out=fwd)
-    return np.sqrt(fwd, out=fwd)
-
-
-@pytest.mark.parametrize(
-    "n", [0, 1, 5, profile_module.CACHE_PIECE, 3 * profile_module.CACHE_PIECE + 7]
-)
-def test_passes_in_pieces_are_the_whole_columns_passes(n):
-    rng = np.random.default_rng(n)
-    b2 = rng.uniform(0, 1e4, n + 1) ** 2
-    b2[rng.random(n + 1) < 0.1] = 0.0
-    up = rng.uniform(0, 50, n) * rng.uniform(0, 2, n)
-    dn = rng.uniform(0, 50, n)
-    for finite in (True, False):
-        got = profile_module._passes_of(b2, up, dn, finite=finite)
-        assert got.tobytes() == _passes_whole(b2, up, dn, finite).tobytes()
-    if n:  # terms that are not plain: inf, NaN, < 0
-        up[:: max(1, n // 7)] = np.inf
-        dn[1 :: max(1, n // 5)] = np.nan
-        up[2 :: max(1, n // 3)] = -1.0
-        with np.errstate(invalid="ignore"):  # (inf - inf, sqrt of < 0)
-            got = profile_module._passes_of(b2, up, dn, finite=False)
-            want = _passes_whole(b2, up, dn, False)
-        assert got.tobytes() == want.tobytes()
-
-
 def test_effective_acceleration_only_is_acc_outside():
     rng = np.random.default_rng(11)
     n = 5000

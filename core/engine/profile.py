@@ -731,46 +731,22 @@ def _passes_of(
     too."""
     n1 = b2.size
     w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
-    fwd = np.empty(n1) if out is None else out
     least = np.fmin if finite else np.minimum
-    # In pieces, their columns in the cache: a piece's running sum and minimum continue
-    # the last piece's (its first element added to, and compared with, the last one's, as
-    # cumsum and accumulate do from element to element: the same operations in the same
-    # order as over the whole columns at once).
-    # forward: W = cumsum(up) from 0, and the running minimum of b2 - W
-    carry = 0.0
-    for s in pieces(n1, CACHE_PIECE):
-        ws, fs = w[s], fwd[s]
-        if s.start == 0:
-            ws[0] = 0.0
-            np.cumsum(up[: s.stop - 1], out=ws[1:])
-        else:
-            ws[...] = up[s.start - 1 : s.stop - 1]
-            ws[0] += w[s.start - 1]
-            np.add.accumulate(ws, out=ws)
-        np.subtract(b2[s], ws, out=fs)
-        if s.start:
-            fs[0] = least(carry, fs[0])
-        least.accumulate(fs, out=fs)
-        carry = fs[-1]
-        fs += ws
-    # backward: W = cumsum(dn) from 0, and the running minimum of b2 + W from the end
-    np.cumsum(dn, out=w[1:])  # (w[0] is 0)
-    for s in reversed(list(pieces(n1, CACHE_PIECE))):
-        ws, fs, bs = w[s], fwd[s], bwd[s]
-        np.add(b2[s], ws, out=bs)
-        rev = bs[::-1]
-        if s.stop < n1:
-            rev[0] = least(carry, rev[0])
-        least.accumulate(rev, out=rev)
-        carry = rev[-1]
-        bs -= ws
-        np.minimum(fs, bs, out=fs)
-        np.minimum(fs, b2[s], out=fs)
-        if not finite:
-            np.maximum(fs, 0.0, out=fs)
-        np.sqrt(fs, out=fs)
-    return fwd
+    w[0] = 0.0
+    np.cumsum(up, out=w[1:])
+    fwd = np.subtract(b2, w, out=out)
+    least.accumulate(fwd, out=fwd)
+    fwd += w
+    np.cumsum(dn, out=w[1:])
+    np.add(b2, w, out=bwd)
+    rev = bwd[::-1]
+    least.accumulate(rev, out=rev)
+    bwd -= w
+    np.minimum(fwd, bwd, out=fwd)
+    np.minimum(fwd, b2, out=fwd)
+    if not finite:
+        np.maximum(fwd, 0.0, out=fwd)
+    return np.sqrt(fwd, out=fwd)
 
 
 def _plain_terms(terms: NDArray) -> bool:
