@@ -20,6 +20,7 @@ from numpy.typing import NDArray
 from adapters.gcode import words as W
 from adapters.gcode.lexer import Source, Words
 from core.model import geometry as g
+from core.model.arrays import isin, unique
 from core.model.errors import InputError, Notes
 from core.model.limits import MAX_TOOL
 from core.model.pieces import pieces, piecewise
@@ -89,14 +90,14 @@ def detect_dialect(path: str, words: Words) -> str:
     g_values = words.value[words.letter == ord("G")]
     # a G word out of range (G1e999) is refused where it is read; here it only must not be
     # cast to an integer
-    g_codes = np.unique(np.rint(g_values[np.abs(g_values) < 1e6] * 10).astype(np.int64))
-    if np.isin(g_codes, [600, 6410, 6420, 6430, 6440, 6450, 7000, 7100, 5000]).any():
+    g_codes = unique(np.rint(g_values[np.abs(g_values) < 1e6] * 10).astype(np.int64))
+    if isin(g_codes, [600, 6410, 6420, 6430, 6440, 6450, 7000, 7100, 5000]).any():
         return "siemens"
-    if np.isin(g_codes, [901, 911, 611]).any():
+    if isin(g_codes, [901, 911, 611]).any():
         return "linuxcnc"
     g64_lines = words.line[(words.letter == ord("G")) & (np.rint(words.value * 10) == 640)]
     p_lines = words.line[words.letter == ord("P")]
-    if np.isin(g64_lines, p_lines).any():
+    if isin(g64_lines, p_lines).any():
         return "linuxcnc"
     return "fanuc"
 
@@ -337,7 +338,7 @@ class Interpreter:
         if w.block_delete:
             lines = np.array(sorted(w.block_delete), dtype=np.int64)
             if self.block_delete:
-                self._drop(~np.isin(w.line, lines))
+                self._drop(~isin(w.line, lines))
                 self.notes.add(
                     "block-delete lines skipped (block delete on)", int(lines[0]), lines.size
                 )
@@ -355,11 +356,11 @@ class Interpreter:
                 w.line[np.flatnonzero(is_m)[np.argmax(frac)]],
                 f"M{mval[np.argmax(frac)]:g} is not an M-code ncperf knows",
             )
-        ends = w.line[is_m][np.isin(mval, list(W.M_END))]
+        ends = w.line[is_m][isin(mval, list(W.M_END))]
         if ends.size:
             e = int(ends.min())
             after = w.line > e
-            motion = after & np.isin(w.letter, [ord(c) for c in "GXYZ"])
+            motion = after & isin(w.letter, [ord(c) for c in "GXYZ"])
             if motion.any():
                 self.notes.add(
                     "words after the end of program (M2/M30) ignored",
@@ -396,7 +397,7 @@ class Interpreter:
         with np.errstate(invalid="ignore", over="ignore"):  # G1e308: "unknown G-code" below
             code = np.rint(v * 10).astype(np.int64)
         group = np.full(gi.size, -1, dtype=np.int64)
-        for c in np.unique(code):
+        for c in unique(code):
             sel = code == c
             first = w.line[gi[np.argmax(sel)]]
             entry = table.get(int(c))
@@ -407,7 +408,7 @@ class Interpreter:
             if entry.message:
                 self.notes.add(entry.message, first)
             group[sel] = entry.group
-        if self.lengths_known and np.isin(code, [430, 431, 432]).any():
+        if self.lengths_known and isin(code, [430, 431, 432]).any():
             raise NeedsInterpreter("tool lengths from the machine file")
         exact = np.abs(v * 10 - code) < TOL.code_number
         if not exact.all():
@@ -427,7 +428,7 @@ class Interpreter:
         none = np.broadcast_to(np.int32(-1), (self.na,))
         rows = [none] * W.N_GROUPS
         g_mod, li_mod, code_mod = group[modal], li[modal], code[modal]
-        for grp in np.unique(g_mod).tolist():
+        for grp in unique(g_mod).tolist():
             sel = g_mod == grp
             row = np.full(self.na, -1, dtype=np.int32)
             row[li_mod[sel]] = code_mod[sel]
@@ -449,7 +450,7 @@ class Interpreter:
         self.has_m = np.zeros(self.na, dtype=bool)
         self.has_m[li] = True
         self.m_stop = np.zeros(self.na, dtype=bool)
-        self.m_stop[li[np.isin(m, list(W.M_STOP))]] = True
+        self.m_stop[li[isin(m, list(W.M_STOP))]] = True
         self.m_tool = np.zeros(self.na, dtype=bool)
         self.m_tool[li[m == W.M_TOOL_CHANGE]] = True
 
@@ -563,7 +564,7 @@ class Interpreter:
             given[ch] = gvn
         has_axis = given["X"] | given["Y"] | given["Z"]
         motion = self.motion
-        explicit_arc = np.isin(gg[G.MOTION], [W.MOTION_CW, W.MOTION_CCW])
+        explicit_arc = isin(gg[G.MOTION], [W.MOTION_CW, W.MOTION_CCW])
         centre_words = pres["I"] | pres["J"] | pres["K"]
         full_circle = explicit_arc & ~has_axis & centre_words
         no_mode = has_axis & ~home & ((motion < 0) | (motion == W.MOTION_NONE))
@@ -657,8 +658,8 @@ class Interpreter:
             self.consumed["P"] = dwell_line & p["P"]
         else:  # siemens: G4 F (s); G4 S is in spindle revolutions
             s_lines = self._s_lines
-            if np.isin(al[dwell_line], s_lines).any():
-                k = np.flatnonzero(dwell_line)[np.isin(al[dwell_line], s_lines)][0]
+            if isin(al[dwell_line], s_lines).any():
+                k = np.flatnonzero(dwell_line)[isin(al[dwell_line], s_lines)][0]
                 raise self.error(al[k], "G4 S (dwell in spindle revolutions) is not supported")
             t = np.where(p["F"], v["F"], np.nan)
             self.consumed["F"] = dwell_line & p["F"]
@@ -673,7 +674,7 @@ class Interpreter:
         """Words no code on their block uses: an error, never a silent misreading."""
         G = W.Group
         p, al, gg = self.pres, self.al, self.g
-        arc = self.is_move & np.isin(self.kind, [MoveKind.ARC_CW, MoveKind.ARC_CCW]) & ~self.home
+        arc = self.is_move & isin(self.kind, [MoveKind.ARC_CW, MoveKind.ARC_CCW]) & ~self.home
         self.arc = arc
         for ch in "IJKR":
             bad = p[ch] & ~arc
@@ -705,7 +706,7 @@ class Interpreter:
             return None
         o = self.w.letter == ord("O")
         lines_o = self.li[o]
-        others = np.isin(self.li, lines_o) & ~np.isin(self.w.letter, [ord("O"), ord("N")])
+        others = isin(self.li, lines_o) & ~isin(self.w.letter, [ord("O"), ord("N")])
         return int(self.w.line[np.argmax(others)]) if others.any() else None
 
     # ------------------------------------------------------------------ build
@@ -730,7 +731,7 @@ class Interpreter:
             change = np.zeros(0, dtype=np.int64)
         cols["tool"] = tool_line[mi].astype(np.int32)
         first_move = np.searchsorted(mi, change, side="left")
-        offs = np.unique(np.concatenate([[0], first_move[first_move < n], [n]]))
+        offs = unique(np.concatenate([[0], first_move[first_move < n], [n]]))
         names = []
         for a in offs[:-1]:
             t = int(cols["tool"][a])
@@ -837,7 +838,7 @@ class Interpreter:
         self._arcs(cols, mi)
 
         # Path mode: modal exact stop, G9 on the block, M0/M1 after the block.
-        exact_line = np.isin(self.path_mode, W.exact_stop_codes(self.dialect)) | (
+        exact_line = isin(self.path_mode, W.exact_stop_codes(self.dialect)) | (
             self.g[W.Group.EXACT_STOP_BLOCK] >= 0
         )
         mode = np.where(exact_line[mi], PathMode.EXACT_STOP, PathMode.CONTINUOUS).astype(np.int8)

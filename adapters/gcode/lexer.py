@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 from adapters.gcode import words as W
 from adapters.gcode.numbers import read_numbers
 from adapters.source import Source, check_bytes
+from core.model.arrays import isin, unique
 
 SPACE, TAB, CR, LF, VT, FF = 32, 9, 13, 10, 11, 12
 
@@ -96,7 +97,7 @@ def _plain_text(src: Source, special: NDArray[np.bool_]) -> bytes:
     first)."""
     odd = np.flatnonzero(np.frombuffer(src.data.translate(_ODD), dtype=bool))
     if odd.size:
-        special[np.unique(_lines_of(src.nl, odd))] = True
+        special[unique(_lines_of(src.nl, odd))] = True
     del odd
     text = src.data.translate(_UPPER, _WHITESPACE)  # a newline stays where it was, in lines
     lf: NDArray[np.int64] | None = None
@@ -113,7 +114,7 @@ def _plain_text(src: Source, special: NDArray[np.bool_]) -> bytes:
             t = np.frombuffer(text, dtype=np.uint8)
             lf = np.flatnonzero(t == LF)
             left = np.flatnonzero((t == ord("(")) | (t == ord(")")))
-            special[np.unique(_lines_of(lf, left))] = True
+            special[unique(_lines_of(lf, left))] = True
             del t, left
     sp = np.flatnonzero(special)
     if sp.size:
@@ -162,7 +163,7 @@ def tokenize(src: Source) -> Words:
     # Lines the plain path cannot read: a letter with no number (a keyword such as
     # Siemens SOFT, or "X" alone), or number characters before the line's first letter
     # (right after a newline, or at the start).
-    bad = set(np.unique(wline[empty]).tolist())
+    bad = set(unique(wline[empty]).tolist())
     after = lfpos + 1
     after = after[after < c.size]
     orphan = after[~brk_mask[after]]
@@ -177,7 +178,7 @@ def tokenize(src: Source) -> Words:
     # formed, C's parse of them all and the search for the lines to blame below.
     want = ~empty
     if bad:
-        want &= ~np.isin(wline, np.array(sorted(bad), dtype=np.int64))
+        want &= ~isin(wline, np.array(sorted(bad), dtype=np.int64))
     if want.all():
         values = read_numbers(text, lpos, span_end)
     elif want.any():
@@ -195,7 +196,7 @@ def tokenize(src: Source) -> Words:
                 sep[a:b] = SPACE
             numbers = sep.tobytes()
             del sep
-        want = ~empty & ~np.isin(wline, bad_arr)
+        want = ~empty & ~isin(wline, bad_arr)
         if not want.any():
             break
         vals = _fromstring(numbers)
@@ -211,7 +212,7 @@ def tokenize(src: Source) -> Words:
             break
         if attempt:  # pragma: no cover - the validation below finds every bad span
             raise AssertionError("G-code lexer: numbers could not be aligned with words")
-        bad.update(np.unique(wline[want & ~_well_formed(c, lpos + 1, span_end)]).tolist())
+        bad.update(unique(wline[want & ~_well_formed(c, lpos + 1, span_end)]).tolist())
     # The numbers' text is spent: it goes before the words are cut out.
     del numbers, lfpos
     if values is None:  # no word to read

@@ -21,6 +21,7 @@ from numpy.typing import NDArray
 
 from adapters.gcode.interp import ffill
 from adapters.gcode.lexer import Words
+from core.model.arrays import isin, unique
 from core.model.errors import Notes
 from core.model.segments import chord_deviation, included_angle, merge_lines, split_flat_arcs
 from core.model.toolpath import MoveKind, PathMode, ToolPath
@@ -54,11 +55,11 @@ def scan(words: Words, block_delete: bool = False) -> LineInfo | None:
     n = words.n_lines
     letter, value, line = words.letter, words.value, words.line
     if block_delete and words.block_delete:
-        keep = ~np.isin(line, np.fromiter(words.block_delete, dtype=np.int64))
+        keep = ~isin(line, np.fromiter(words.block_delete, dtype=np.int64))
         letter, value, line = letter[keep], value[keep], line[keep]
     is_g = letter == ord("G")
     code = np.where(is_g & (np.abs(value) < 1e6), np.rint(value * 10), -1).astype(np.int64)
-    g64_lines = np.unique(line[code == 640])
+    g64_lines = unique(line[code == 640])
     if g64_lines.size == 0:
         return None
 
@@ -79,7 +80,7 @@ def scan(words: Words, block_delete: bool = False) -> LineInfo | None:
     unit_set[line[code == 210]] = 1.0
     scale = ffill(unit_set, ~np.isnan(unit_set), 1.0)
     # the tolerance set on each path-mode line: G64 Q, else G64 P, else 0; G61/G61.1: 0
-    mode_lines = np.unique(line[np.isin(code, [610, 611, 640])])
+    mode_lines = unique(line[isin(code, [610, 611, 640])])
     g64 = np.zeros(n, dtype=bool)
     g64[g64_lines] = True
     set_tol = np.where(has_q & (q >= 0), q, np.where(has_p & (p >= 0), p, 0.0)) * scale
@@ -88,8 +89,8 @@ def scan(words: Words, block_delete: bool = False) -> LineInfo | None:
     is_mode[mode_lines] = True
     tol = ffill(set_tol, is_mode, 0.0)
     flush = np.zeros(n, dtype=bool)
-    flush[line[np.isin(letter, _LETTERS_THAT_FLUSH)]] = True
-    flush[line[np.isin(code, list(FLUSHING_G))]] = True
+    flush[line[isin(letter, _LETTERS_THAT_FLUSH)]] = True
+    flush[line[isin(code, list(FLUSHING_G))]] = True
     return LineInfo(tol=tol, flushes=np.cumsum(flush))
 
 

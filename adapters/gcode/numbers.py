@@ -24,6 +24,8 @@ import re
 import numpy as np
 from numpy.typing import NDArray
 
+from core.model.arrays import unique
+
 #: Words per piece: the pieces' temporaries stay in the cache.
 PIECE = 1 << 15
 
@@ -159,7 +161,7 @@ def read_numbers(
                     return None
                 o[k] = v
         if long.any():  # 16 digits
-            rest = np.union1d(rest, np.flatnonzero(long & np.isnan(o)))
+            rest = unique(np.concatenate((rest, np.flatnonzero(long & np.isnan(o)))))  # union1d
         for i in rest.tolist():  # the text's first bytes, absurdly long numbers
             t = text[int(s[i]) : int(e[i])]
             if _WELL_FORMED.fullmatch(t) is None:

@@ -40,6 +40,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.cli.output import atomic_writer
 from core.model import geometry as g
+from core.model.arrays import unique
 from core.model.pieces import pieces
 from core.model.text import printable
 from core.model.tolerances import TOL
@@ -848,7 +849,7 @@ def markers(st: Strokes, tp: ToolPath, ann: Annotations) -> tuple[list[bytes], i
         b" mm/min</title></circle>\n" + opener,
     ]
     out = []
-    for c in np.unique(jc).tolist():
+    for c in unique(jc).tolist():
         m = np.flatnonzero(jc == c)
         k = m.size
         vals = np.empty((k, 6), dtype=np.int64)

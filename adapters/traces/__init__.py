@@ -17,15 +17,17 @@ from __future__ import annotations
 
 import os
 import re
-from datetime import UTC, datetime
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 import numpy as np
 
 from core import InputError, Notice, hookimpl
 from core.model.inputs import read_input, read_input_text
 from core.model.limits import FEED_RANGE, MAX_COORD
-from core.model.trace import Trace, TraceOptions
+
+if TYPE_CHECKING:  # (the readers import it when they run: analyze never does)
+    from core.model.trace import Trace, TraceOptions
 
 INCH = 25.4
 #: A pause longer than this many median sample periods is a gap in the recording.
@@ -89,6 +91,8 @@ def _time_checks(t: np.ndarray, name: str, first_line: int) -> list[Notice]:
 # ---------------------------------------------------------------------------- CSV
 def read_csv_trace(path: Path, options: TraceOptions) -> Trace:
     """A CSV trace with a header (see the module docstring)."""
+    from core.model.trace import Trace
+
     name = str(path)
     header, _, body = read_input_text(path, what="a trace").partition("\n")
     cols = [c.strip().lower() for c in header.strip().split(",")]
@@ -188,12 +192,16 @@ def _seconds(stamp: str) -> float:
     main, dot, frac = stamp.partition(".")
     if dot and not (frac.isascii() and frac.isdigit()):
         raise ValueError(f"fraction of a second '{frac}' is not digits")
+    from datetime import UTC, datetime
+
     base = datetime.strptime(main, "%Y-%m-%dT%H:%M:%S").replace(tzinfo=UTC)
     return base.timestamp() + (float("0." + frac) if frac else 0.0)
 
 
 def read_shdr_trace(path: Path, options: TraceOptions) -> Trace:
     """An MTConnect SHDR recording (see the module docstring)."""
+    from core.model.trace import Trace
+
     name = str(path)
     text = read_input_text(path, what="a trace")
     scale, units = _scale(options, name)

@@ -55,7 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
-from core.model.arrays import nan_to_num
+from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
 from core.model.pieces import pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
@@ -75,9 +75,14 @@ LOCAL_SHARE = 32
 LOCAL_REACH = 8
 #: Most moves a ramp chain's ends are searched at a time (from 2, doubling).
 CHAIN_WINDOW = 64
+#: A round's direction works over whole columns (:meth:`_Rounds._dense`) where more than
+#: 1 / DENSE_SHARE of the moves are in a ramp phase and the ramps are found everywhere.
+DENSE_SHARE = 4
 
 
-def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> NDArray[np.float64]:
+def effective_acceleration(
+    dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike, only: NDArray[np.bool_] | None = None
+) -> NDArray[np.float64]:
     """A_eff = dv / T of S-curve speed changes (mm/s^2).
 
     Parameters
@@ -86,11 +91,14 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
         Speed change of the ramp (>= 0).
     acc, jerk : (m,) float
         Tangential acceleration (mm/s^2) and jerk (mm/s^3, may be inf).
+    only : (m,) bool, optional
+        The changes that are ramps: ``acc`` elsewhere, put with the other moves that keep
+        it (the rounds' targets in one pass).
 
     Returns
     -------
     (m,) float, mm/s^2
-        ``acc`` where the jerk is infinite or the change is nil.
+        ``acc`` where the jerk is infinite or the change is nil (or not ``only``).
     """
     dv = np.asarray(dv, dtype=np.float64)
     a = np.asarray(acc, dtype=np.float64)
@@ -101,7 +109,8 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
             t_short = 2.0 * np.sqrt(dv / j)
             t = np.where(dv >= a * a / j, t_full, t_short)
             out = dv / t
-        return np.where(np.isfinite(j) & (dv > TOL.nil_speed), out, a)
+        keep = np.isfinite(j) & (dv > TOL.nil_speed)
+        return np.where(keep if only is None else keep & only, out, a)
     # Columns of one shape (the rounds'): the same operations in the same order, written
     # over their temporaries.
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -113,13 +122,15 @@ def effective_acceleration(dv: ArrayLike, acc: ArrayLike, jerk: ArrayLike) -> ND
         t_short *= 2.0  # 2 sqrt(dv / j)
         lim = a * a
         lim /= j
-        np.copyto(t_full, t_short, where=~(dv >= lim))  # t: t_full where dv >= A^2 / J
-        del t_short, lim
-        np.divide(dv, t_full, out=t_full)
+        t = select(dv >= lim, t_full, t_short)  # t_full where dv >= A^2 / J
+        del t_full, t_short, lim
+        np.divide(dv, t, out=t)
         keep = np.isfinite(j)
         keep &= dv > TOL.nil_speed
-        np.copyto(t_full, a, where=~keep)
-    return t_full
+        if only is not None:
+            keep &= only
+        put_where(t, a, ~keep)
+    return t
 
 
 def s_curve(
@@ -1023,7 +1034,7 @@ class _Rounds:
         self.marks: tuple[NDArray, NDArray, NDArray, NDArray, NDArray] | None = None
         self.v_last = np.zeros(0)
         # moves whose accelerations (and so the peak's denominator) the last round changed
-        self.moved: list[NDArray | slice] = []
+        self.moved: list[NDArray | slice] = []  # (indices, a slice or an (n,) mask)
         # per direction (True: accelerating): the moves whose acceleration the damping kept
         # off their target, and their targets
         self.behind = {d: (np.zeros(0, dtype=np.intp), np.zeros(0)) for d in (True, False)}
@@ -1072,7 +1083,10 @@ class _Rounds:
         dirty |= changed[1:]
         del changed
         for k in self.moved:
-            dirty[k] = True
+            if isinstance(k, np.ndarray) and k.dtype == bool:
+                dirty |= k
+            else:
+                dirty[k] = True
         at = np.flatnonzero(dirty)
         del dirty
         if at.size == 0:
@@ -1146,7 +1160,24 @@ class _Rounds:
                 f = np.greater(pk, li, out=fall[s])
                 # the cruise length (_moves' d_cr) of the moves that only accelerate or only
                 # brake: through their end or from their start if it is nil
-                x = np.flatnonzero(np.not_equal(r, f, out=one[:m]))
+                only = np.not_equal(r, f, out=one[:m])
+                if DENSE_SHARE * np.count_nonzero(only) > m:  # most of them: whole columns
+                    # (2 L - (peak^2 - v0^2) / a_up - ... as below, over every move)
+                    pk2 = pk * pk
+                    np.subtract(pk2, q[:-1], out=t)
+                    t /= 2 * a_up[s]
+                    d_cr = between[s] - t
+                    np.subtract(pk2, q[1:], out=t)
+                    t /= 2 * a_dn[s]
+                    d_cr -= t
+                    np.maximum(d_cr, 0.0, out=d_cr)
+                    flat = d_cr <= TOL.nil_distance
+                    flat &= only
+                    u = slice(s.start + 1, s.stop + 1)
+                    np.logical_and(r, flat, out=through_up[u])
+                    np.logical_and(f, flat, out=through_dn[u])
+                    continue
+                x = np.flatnonzero(only)
                 if x.size == 0:
                     continue
                 px = pk[x]
@@ -1240,6 +1271,8 @@ class _Rounds:
         acc = self.acc
         off = self.off_up if rising else self.off_dn
         found = None if near is None else self._local(rising, near, v0, v1, peak)
+        if found is None and DENSE_SHARE * np.count_nonzero(phase) > a.size:
+            return self._dense(rising, phase, through, v0, v1, peak)
         cand: NDArray | slice
         if found is None:
             cand, new, old = self._everywhere(rising, phase, through, v0, v1, peak)
@@ -1267,6 +1300,85 @@ class _Rounds:
         term[cand] = terms
         if self.finite and not _plain_terms(terms):
             self.finite = False
+        if rising:
+            self.step_up = step
+        else:
+            self.step_dn = step
+        return change
+
+    def _dense(self, rising, phase, through, v0, v1, peak) -> float:
+        """:meth:`_direction` over every move at once where most moves are in a ramp phase
+        (stellabee1: three in four): the targets, the damping and the updates made on whole
+        columns in pieces (their temporaries in the cache), not gathered on the candidates.
+
+        The same values: a move is a candidate there exactly where its target (the ramp's
+        A_eff in a ramp phase, ``acc`` elsewhere) is not its current acceleration (``off``
+        is ``a != acc``); elsewhere the target is the current acceleration, whose damped
+        step is nil (sign 0, the same acceleration), and a nil step changes nothing: no
+        move, no term, a step sign 0, a relative change 0 (or NaN, which ``nanmax``
+        skips). The signs are read from comparisons (``sign(x - y)`` of doubles is the sign
+        of ``x`` against ``y``, and 0 where NaN as the int8 cast gives)."""
+        if rising:
+            a, last, term, off = self.a_up, self.step_up, self.term_up, self.off_up
+            self.last_up = None  # (kept by _effective for sparse ramps only)
+        else:
+            a, last, term, off = self.a_dn, self.step_dn, self.term_dn, self.off_dn
+            self.last_dn = None
+        acc, jerk, between = self.acc, self.jerk, self.holds.between
+        n = a.size
+        dv = _chain_dv(rising, phase, through, v0, v1, peak)
+        step = np.empty(n, dtype=np.int8)
+        moved = np.empty(n, dtype=bool)
+        at_behind, wanted = [], []
+        change = 0.0
+        finite = self.finite
+        for s in pieces(n, CACHE_PIECE):
+            od = a[s]  # (a view: written where the acceleration moves)
+            new = effective_acceleration(dv[s], acc[s], jerk[s], phase[s])  # the targets
+            ls = last[s]
+            back = new > od
+            back &= ls < 0
+            t = new < od
+            t &= ls > 0
+            back |= t
+            out = new.copy()
+            k = np.flatnonzero(back)
+            if k.size:
+                out[k] = np.sqrt(od[k] * new[k])
+                held = out[k] != new[k]  # (only a damped step is off its target)
+                if held.any():
+                    at_behind.append(k[held] + s.start)
+                    wanted.append(new[k[held]])
+            t = np.greater(out, od, out=t)
+            st = step[s]
+            np.copyto(st, t, casting="unsafe")
+            st -= out < od
+            with np.errstate(divide="ignore", invalid="ignore"):
+                rel = out / od
+                rel -= 1.0
+                np.abs(rel, out=rel)
+                change = max(change, float(np.nanmax(rel, initial=0.0)))
+            mv = np.not_equal(out, od, out=moved[s])
+            if not mv.any():
+                continue
+            # where a move keeps its acceleration, ``out`` is that value (not NaN: NaN
+            # moves), bit for bit unless a zero changes sign: written whole but then
+            if (out == 0.0).any():
+                put_where(od, out, mv)
+            else:
+                od[...] = out
+            # ``off`` is a != acc, ``term`` the pass terms of ``a``: made whole again
+            np.not_equal(od, acc[s], out=off[s])
+            tm = _pass_terms(od, np.maximum(between[s], 0.0))
+            term[s] = tm
+            if finite and not _plain_terms(tm):  # (the others were plain)
+                finite = False
+        self.finite = finite
+        self.behind[rising] = (
+            np.concatenate(at_behind) if at_behind else np.zeros(0, dtype=np.intp),
+            np.concatenate(wanted) if wanted else np.zeros(0),
+        )
+        self.moved.append(moved)
         if rising:
             self.step_up = step
         else:
@@ -1399,12 +1511,49 @@ class _Rounds:
         target = np.concatenate([eff, self.acc[alone]])
         del moves, eff
         behind, wanted = self.behind[rising]
-        kept = ~np.isin(behind, found)
+        kept = ~isin(behind, found)
         cand = np.concatenate([behind[kept], found])
         new = np.concatenate([wanted[kept], target])
         old = a[cand]
         differ = new != old
         return cand[differ], new[differ], old[differ]
+
+
+def _chain_dv(rising, phase, through, v0, v1, peak) -> NDArray:
+    """(n,) the speed change of each move's ramp, as :meth:`_Rounds._ramp_dv` makes it for
+    the moves in a ramp ``phase`` (any value elsewhere): the moves run in chains (a move
+    continuing the one before, see :meth:`_Rounds._everywhere`) and the moves outside a
+    phase one by one; a chain's change is from its first move's lower speed to its last
+    move's upper one (rising: v0 of the first to v1 or the peak of the last; falling: v0
+    or the peak of the first to v1 of the last). Every move first as a chain of its own
+    (elementwise), then the chains of several moves from their ends, repeated over them."""
+    n = phase.size
+    # cont[k]: move k continues the chain of move k - 1 (cont[n]: no move there)
+    cont = np.zeros(n + 1, dtype=bool)
+    if rising:
+        np.logical_and(through[:n], phase, out=cont[:n])
+    else:
+        c = cont[1:n]
+        np.logical_and(through[2:], phase[1:], out=c)
+        c &= phase[:-1]
+    # the upper speed at the ramp's end of each move (rising: its end, falling: its start)
+    upper = peak.copy()
+    put_where(upper, v1 if rising else v0, through[1:])
+    lower = v0 if rising else v1
+    dv = upper - lower
+    multi = cont[:n] | cont[1:]  # in a chain of several moves
+    at = np.flatnonzero(multi)
+    if at.size:
+        first = np.flatnonzero(multi & ~cont[:n])
+        last = np.flatnonzero(multi & ~cont[1:])
+        if rising:
+            hi = upper[last]
+            hi -= lower[first]
+        else:
+            hi = upper[first]
+            hi -= lower[last]
+        dv[at] = np.repeat(hi, last - first + 1)
+    return dv
 
 
 def _damped(

@@ -38,7 +38,6 @@ Optional, for the readers (:mod:`core.model.setup`) and rotary axes::
 
 from __future__ import annotations
 
-import difflib
 import math
 import re
 import sys
@@ -248,6 +247,8 @@ def _check_keys(
     known = expected + optional
     for key in table:
         if key not in known:
+            import difflib  # (a misspelt key only)
+
             close = difflib.get_close_matches(key, known, n=1)
             hint = (
                 f"; did you mean '{close[0]}'?"

@@ -20,6 +20,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from core.model import geometry as g
+from core.model.arrays import unique
 from core.model.errors import Notice
 from core.model.pieces import pieces, piecewise
 from core.model.sampling import PathSamples
@@ -555,7 +556,7 @@ class ToolPath:
         # the same numbers).
         arcs = self._arc["idx"]
         near = np.concatenate([arcs - 1, arcs])
-        near = np.unique(near[(near >= 0) & (near < self.n - 1)])
+        near = unique(near[(near >= 0) & (near < self.n - 1)])
         if 2 * near.size <= self.n - 1:
             out = np.zeros(self.n - 1)
             for b in pieces(near.size):

@@ -12,7 +12,7 @@ from numpy.typing import NDArray
 from core.engine.indicators import Evaluation
 from core.engine.profile import Profile
 from core.model.arrays import nan_to_num
-from core.model.pieces import pieces
+from core.model.pieces import PIECE, pieces
 
 #: A junction or block is a slow point of a zone when its predicted feed is at least
 #: this much below the programmed feed (the paper's green class ends at 10 %).
@@ -151,10 +151,16 @@ def _worst_of_runs(
     which = np.full(n_z, -1, dtype=np.int8)
     low = np.full(n_z, np.nan)
     counts = []
-    for size, get in runs:
+    # a run of one piece keeps its points for the second loop (no larger than a piece,
+    # which the loops make anyway): they are not made twice
+    kept: dict[int, tuple[NDArray, NDArray, NDArray]] = {}
+    for r, (size, get) in enumerate(runs):
         count = np.zeros(n_z, dtype=np.int64)
         for b in pieces(size):
-            _, zb, rb = get(b)
+            got = get(b)
+            if size <= PIECE:
+                kept[r] = got
+            _, zb, rb = got
             if zb.size == 0:
                 continue
             np.add.at(count, zb, 1)
@@ -164,7 +170,7 @@ def _worst_of_runs(
         counts.append(count)
     for r, (size, get) in enumerate(runs):  # in order, each in pieces in order: the
         for b in pieces(size):  # first point claims
-            ids, zb, rb = get(b)
+            ids, zb, rb = kept.pop(r) if r in kept else get(b)
             lo = low[zb]
             k = np.flatnonzero((rb == lo) | (np.isnan(lo) & np.isnan(rb)))
             zk = zb[k]
