@@ -45,6 +45,10 @@ NEAR_WORTH = 0.5
 #: Relative margin on the polyline lengths that bound distances along the path (their sums'
 #: rounding).
 REACH_SLACK = 1e-12
+#: Bound on the rounding of one merge of :func:`isotonic`'s pool, relative to the largest
+#: |value| (a weighted mean of two: two products, a sum and a quotient, ~4 units in the last
+#: place, 2^-52 each).
+POOL_ROUNDING = 4 * 2.0**-52
 
 
 def _sum3(x: NDArray[np.float64], y: NDArray[np.float64], z: NDArray[np.float64]) -> NDArray:
@@ -385,10 +389,33 @@ class PathSamples:
 
 def isotonic(y: ArrayLike) -> NDArray[np.float64]:
     """Least-squares non-decreasing fit of ``y`` (pool adjacent violators): arc lengths of
-    samples in time, made to run forward only."""
+    samples in time, made to run forward only.
+
+    Pooling never crosses a place where everything before is clearly below everything after
+    (the largest value before + the pooled means' rounding < the smallest after - it): the
+    stretches between such places are pooled each on its own, one after the other, as one
+    pass over all of ``y`` would pool them (the same operations on the same numbers), and
+    a stretch of one sample is that sample."""
     y = np.asarray(y, dtype=np.float64)
     if y.size == 0 or np.all(np.diff(y) >= 0):
         return y.copy()
+    out = y.copy()
+    # A pooled mean is within POOL_ROUNDING x (its merges) x max |y| of the exact mean of
+    # its samples, hence within that of the range of the values it pools.
+    with np.errstate(invalid="ignore", over="ignore"):
+        margin = 2.0 * POOL_ROUNDING * y.size * float(np.max(np.abs(y)))
+        below = np.maximum.accumulate(y)[:-1]
+        above = np.minimum.accumulate(y[::-1])[::-1][1:]
+        cut = above - below > margin  # (False where a value is not finite)
+    edges = np.concatenate([[0], np.flatnonzero(cut) + 1, [y.size]])
+    for k in np.flatnonzero(np.diff(edges) > 1).tolist():
+        a, b = int(edges[k]), int(edges[k + 1])
+        out[a:b] = _pooled(y[a:b])
+    return out
+
+
+def _pooled(y: NDArray[np.float64]) -> NDArray[np.float64]:
+    """:func:`isotonic` of ``y`` in one pass (the pool of adjacent violators)."""
     vals: list[float] = []
     counts: list[int] = []
     for v in y.tolist():
