@@ -159,22 +159,39 @@ class PathSamples:
         qx, qy, qz = q[:, 0], q[:, 1], q[:, 2]
         s = s_p[i]
         best = d2.copy()
+        # (in place where the values allow: the same operations on the same numbers)
         for a in (np.maximum(i - 1, 0), i):
             b = np.minimum(a + 1, last)
             ax, ay, az = px[a], py[a], pz[a]
-            abx, aby, abz = px[b] - ax, py[b] - ay, pz[b] - az
+            abx, aby, abz = px[b], py[b], pz[b]
+            abx -= ax
+            aby -= ay
+            abz -= az
             aqx, aqy, aqz = qx - ax, qy - ay, qz - az
             l2 = _sum3(abx * abx, aby * aby, abz * abz)
+            u = _sum3(aqx * abx, aqy * aby, aqz * abz)
             with np.errstate(invalid="ignore", divide="ignore"):
-                u = _sum3(aqx * abx, aqy * aby, aqz * abz) / l2
+                u /= l2
             np.clip(u, 0.0, 1.0, out=u)
-            aqx -= u * abx
-            aqy -= u * aby
-            aqz -= u * abz
-            e2 = _sum3(aqx * aqx, aqy * aqy, aqz * aqz)
-            better = (l2 > 0.0) & (e2 < best)
-            s = np.where(better, s_p[a] + u * (s_p[b] - s_p[a]), s)
-            best = np.where(better, e2, best)
+            abx *= u
+            aqx -= abx
+            aby *= u
+            aqy -= aby
+            abz *= u
+            aqz -= abz
+            aqx *= aqx
+            aqy *= aqy
+            aqz *= aqz
+            e2 = _sum3(aqx, aqy, aqz)
+            better = l2 > 0.0
+            better &= e2 < best
+            # s_p[a] + u (s_p[b] - s_p[a])
+            s_a, s_b = s_p[a], s_p[b]
+            s_b -= s_a
+            s_b *= u
+            s_b += s_a
+            np.copyto(s, s_b, where=better)
+            np.copyto(best, e2, where=better)
         return s, np.sqrt(best)
 
     def _near_first(
