@@ -27,7 +27,7 @@ MAX_SAMPLES = 400_000
 #: Filtered motions (:attr:`Prediction._filtered`) the predictions of one plan keep, the
 #: most recent: a fit's candidates whose filters come to the same samples (a window that
 #: rounds to the same count) take the kept one instead of filtering and projecting again.
-FILTERED_KEPT = 8
+FILTERED_KEPT = 4
 
 
 @dataclass(frozen=True, eq=False)
