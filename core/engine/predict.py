@@ -24,6 +24,10 @@ from core.model.toolpath import PathMode, ToolPath
 #: get a coarser step so that the signal stays under MAX_SAMPLES.
 SIGNAL_DT = 0.001
 MAX_SAMPLES = 400_000
+#: Filtered motions (:attr:`Prediction._filtered`) the predictions of one plan keep, the
+#: most recent: a fit's candidates whose filters come to the same samples (a window that
+#: rounds to the same count) take the kept one instead of filtering and projecting again.
+FILTERED_KEPT = 4
 
 
 @dataclass(frozen=True, eq=False)
@@ -96,11 +100,17 @@ class Prediction:
         # Rest before and after, long enough for the filters' tails to carry the distance.
         head = int(np.ceil(0.5 * su.filter_window / dt)) + 1
         tail = head + int(np.ceil(8.0 * su.servo_tau / dt)) + 1
+        k = max(int(round(su.filter_window / dt)), 1) if su.filter_window > 0 else 1
+        # What the rest depends on besides the shared signal: setups of one plan whose
+        # filters round to the same samples (a fit's window candidates) move alike.
+        key = (head, tail, k, np.float64(su.servo_tau).tobytes())
+        kept: dict = self.shared.setdefault("filtered", {})
+        if key in kept:
+            return kept[key]
         s = np.concatenate([np.full(head, s[0]), s, np.full(tail, s[-1])])
         t = (np.arange(s.size) - head) * dt + t[0]
         # (the points of the padded arc lengths: those of the ends repeated)
         pos = np.concatenate([np.repeat(pos[:1], head, 0), pos, np.repeat(pos[-1:], tail, 0)])
-        k = max(int(round(su.filter_window / dt)), 1) if su.filter_window > 0 else 1
         if k > 1:
             kernel = np.ones(k) / k
             pad = np.concatenate([np.repeat(pos[:1], k, 0), pos, np.repeat(pos[-1:], k, 0)])
@@ -115,7 +125,11 @@ class Prediction:
         # (within a millimetre of it).
         guess = np.interp(t - su.servo_tau, t, s)
         s_obs, _ = tp.sample(PROJECTION_STEP).project_near(pos, guess, half_width=1.0)
-        return t, isotonic(s_obs), v
+        out = t, isotonic(s_obs), v
+        kept[key] = out
+        while len(kept) > FILTERED_KEPT:
+            del kept[next(iter(kept))]  # the oldest
+        return out
 
     def signal(self, *, raw: bool = False) -> tuple[NDArray, NDArray, NDArray]:
         """(t, s, v) of the predicted motion sampled in time (s, mm, mm/s)."""

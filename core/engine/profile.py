@@ -57,7 +57,7 @@ from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
 from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
-from core.model.pieces import pieces, piecewise
+from core.model.pieces import PIECE, pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
 
@@ -195,6 +195,9 @@ def s_curve_big_g(p: ArrayLike, shape: tuple[NDArray, ...]) -> NDArray[np.float6
 
 #: Halvings of :func:`_bisect_ramp`: the share p of a ramp to 2^-26 (1.5e-8) of it.
 HALVINGS = 26
+#: Where the guess's last bracket cannot be told for certain, the bracket HALFWAY halvings
+#: in is checked, and where it can, the halvings start from there.
+HALFWAY = 13
 #: Newton steps of the guess :func:`_bisect_ramp` checks before it bisects: from the
 #: trapezoid ramp's place (off by ~1e-2 of the ramp), three leave 8 % of the places of the
 #: diagnose benchmark (a jerk-limited machine) to the halvings -- half of them on ramps of
@@ -276,19 +279,40 @@ def _bisect_ramp(
     terms = _place_terms(lo, dv, a, vb2, span, shape)
     a_p, b_p, ok = _checked_guess(terms, shape, goal, rising)
     todo = np.flatnonzero(~ok)
-    if todo.size:
-        a_p[todo], b_p[todo] = _halvings(tuple(x[todo] for x in terms), goal[todo], rising)
+    if todo.size == 0:
+        return a_p, b_p
+    # The others: the bracket the halvings pass through HALFWAY halvings in is the guess's
+    # where that can be told for certain (as :func:`_checked_guess` tells the last one's),
+    # else made by them from (0, 1); the rest of the halvings from there.
+    sub = tuple(x[todo] for x in terms)
+    goal = goal[todo]
+    part = float(1 << HALFWAY)
+    a_h = np.floor(a_p[todo] * part) / part
+    b_h = a_h + 1.0 / part
+    unsure = np.flatnonzero(~_sure(sub, goal, a_h, b_h, rising))
+    if unsure.size:
+        a_h[unsure], b_h[unsure] = _halvings(
+            tuple(x[unsure] for x in sub), goal[unsure], rising, None, HALFWAY
+        )
+    a_p[todo], b_p[todo] = _halvings(sub, goal, rising, (a_h, b_h), HALVINGS - HALFWAY)
     return a_p, b_p
 
 
-def _halvings(terms: tuple[NDArray, ...], goal: NDArray, rising: bool) -> tuple[NDArray, NDArray]:
-    """The bisection of :func:`_bisect_ramp`, HALVINGS halvings from (0, 1)."""
+def _halvings(
+    terms: tuple[NDArray, ...],
+    goal: NDArray,
+    rising: bool,
+    ends: tuple[NDArray, NDArray] | None = None,
+    count: int = HALVINGS,
+) -> tuple[NDArray, NDArray]:
+    """The bisection of :func:`_bisect_ramp`: ``count`` halvings of the brackets ``ends``
+    (in place; default: HALVINGS halvings from (0, 1))."""
     n = goal.size
-    a_p, b_p = np.zeros(n), np.ones(n)
+    a_p, b_p = (np.zeros(n), np.ones(n)) if ends is None else ends
     p = np.empty(n)
     work = tuple(np.empty(n) for _ in range(4))
     below = np.empty(n, dtype=bool)
-    for _ in range(HALVINGS):
+    for _ in range(count):
         np.add(a_p, b_p, out=p)
         np.multiply(p, 0.5, out=p)
         x = _place(p, terms, rising, work)
@@ -331,11 +355,29 @@ def _checked_guess(
         full = float(1 << HALVINGS)
         a_p = np.minimum(np.floor(p * full), full - 1.0) / full
         b_p = a_p + 1.0 / full
+    return a_p, b_p, _sure(terms, goal, a_p, b_p, rising, work)
+
+
+def _sure(
+    terms: tuple[NDArray, ...],
+    goal: NDArray,
+    a_p: NDArray,
+    b_p: NDArray,
+    rising: bool,
+    work: tuple[NDArray, ...] | None = None,
+) -> NDArray[np.bool_]:
+    """Where the halvings of :func:`_bisect_ramp` certainly pass through the bracket
+    (``a_p``, ``b_p``) of one of them (see :func:`_checked_guess`): x(a_p) < goal - margin
+    (or a_p = 0) and x(b_p) >= goal + margin (or b_p = 1)."""
+    lo, dv, two_a, vb2, span = terms[:5]
+    if work is None:
+        work = tuple(np.empty(goal.size) for _ in range(4))
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         margin = TOL.sure_compare * (((lo + dv) ** 2 + vb2) / two_a + np.abs(span))
         sane = (two_a > 0) & (lo >= 0) & (dv >= 0) & np.isfinite(margin)
         ok = sane & ((a_p == 0.0) | (_place(a_p, terms, rising, work) < goal - margin))
         ok &= (b_p == 1.0) | (_place(b_p, terms, rising, work) >= goal + margin)
-    return a_p, b_p, ok
+    return ok
 
 
 def tangential_limits(tp: ToolPath, acc: ArrayLike, jerk: ArrayLike) -> tuple[NDArray, NDArray]:
@@ -1567,16 +1609,31 @@ def _damped(
     out = np.empty(new.size)
     step = np.zeros(last.size, dtype=np.int8)
     change = 0.0
+    size = min(new.size, PIECE)
+    work = np.empty(size)
+    back = np.empty(size, dtype=bool)
     for s in pieces(new.size):
         nw, od = new[s], old[s]
         where = s if isinstance(cand, slice) else cand[s]
-        sign = np.sign(nw - od)
-        back = sign * last[where] < 0
-        o = out[s]
-        o[...] = np.where(back, np.sqrt(od * nw), nw)
-        step[where] = np.sign(o - od).astype(np.int8)
+        t, b, o = work[: nw.size], back[: nw.size], out[s]
+        # (in place: the values of sign(nw - od) * last < 0, where(back, sqrt(od nw), nw),
+        # sign(o - od) and |o / od - 1|)
+        np.subtract(nw, od, out=t)
+        np.sign(t, out=t)
+        t *= last[where]
+        np.less(t, 0, out=b)
+        np.multiply(od, nw, out=o)
+        np.sqrt(o, out=o)
+        np.logical_not(b, out=b)
+        np.copyto(o, nw, where=b)
+        np.subtract(o, od, out=t)
+        np.sign(t, out=t)
+        step[where] = t.astype(np.int8)
         with np.errstate(divide="ignore", invalid="ignore"):
-            change = max(change, float(np.nanmax(np.abs(o / od - 1.0), initial=0.0)))
+            np.divide(o, od, out=t)
+            t -= 1.0
+            np.abs(t, out=t)
+            change = max(change, float(np.nanmax(t, initial=0.0)))
     return out, step, change
 
 
