@@ -232,6 +232,39 @@ def test_a_gap_in_the_recording_is_left_out_not_filled_in(nc):
     assert d.best_effect is None
 
 
+def test_a_turn_back_the_samples_jump_is_left_out_not_filled_in(nc, tmp_path):
+    """A 50 mm line out and back (a 180 degree turn at its end, as at the bottom of a drilled
+    hole), sampled every 1 ms at 100 mm/s (0.1 mm apart), whose places jump 2.1 mm twice: once
+    across the turn (a tool off the path near it is as near to either side: where its
+    projection jumps is chance), and once on the way out. 2.1 mm is over JUMP_K = 4 times
+    the 0.1 mm the speed carries in a period: across the turn the grid (every 0.1 mm) has no
+    point between them; on the way out it runs through (a corner cut by a lagging tool is
+    projected alike for the trace and a model)."""
+    from core.diagnosis.align import Alignment
+    from core.diagnosis.resample import resample
+
+    prog = tmp_path / "back.ngc"
+    prog.write_text("G21 G90 G17\nG0 X0 Y0 Z0\nG1 X50 F6000\nG1 X0\nM2\n")
+    tp = nc.extract(str(prog))
+    s0 = tp.start_s[tp.is_feed.argmax()]
+    n = 950
+    t = np.arange(n) * 0.001
+    step = np.full(n, 0.1)
+    step[200] += 2.0  # 2.1 mm between samples 199 and 200 (on the way out)
+    step[480] += 2.0  # 2.1 mm between samples 479 and 480, across the turn at s0 + 50
+    s = s0 + 0.02 + np.cumsum(step) - 0.1  # (places between the grid's)
+    assert s[479] < s0 + 50.0 < s[480]
+    v = np.full(n, 100.0)
+    al = Alignment(
+        s, v, t, np.full(n, 3), "position", np.zeros(3), np.zeros(n), 1.0, 0.0, True, "ok"
+    )
+    data = resample(tp, al, "run")
+    assert not np.any((data.s > s[479]) & (data.s < s[480]))  # 21 grid points
+    assert np.count_nonzero((data.s > s[199]) & (data.s < s[200])) == 21
+    # everywhere else one point every 0.1 mm
+    assert data.s.size == np.arange(s[0] + 0.05, s[-1], 0.1).size - 21
+
+
 def test_paper_baseline_names_acceleration_ramps(nc):
     """Against the paper's point model, a real (ramped) motion is explained by ramps."""
     tp = zigzag()

@@ -27,9 +27,11 @@ from core.diagnosis.rules import (
     CHUNKS,
     COARSE_SAMPLING,
     GAP_PERIODS,
+    JUMP_K,
     MAX_POINTS,
     PER_MIN,
     PIECES,
+    REVERSAL,
     STEP,
     TIME_FLOOR,
 )
@@ -80,7 +82,25 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
         period = float(np.median(np.diff(al.t)))
         last = np.append(first[1:] - 1, al.t.size - 1)  # s is non-decreasing in time
         k = np.clip(np.searchsorted(s_u, grid), 1, s_u.size - 1)
-        hole = al.t[first[k]] - al.t[last[k - 1]] > GAP_PERIODS * period
+        dt = al.t[first[k]] - al.t[last[k - 1]]
+        hole = dt > GAP_PERIODS * period
+        # Nor across a turn back that the samples jumped: where the path turns back on
+        # itself by more than REVERSAL (the bottom of a drilled hole: the feed down and the
+        # rapid up lie on one line), a tool off the path near the turn (a lagging servo, a
+        # setpoint filter) is as near to one side as to the other, and its projection jumps
+        # the turn anywhere within that reach; where consecutive places across a turn are
+        # further apart than JUMP_K times what the measured speed covers in the time between
+        # them (and than a grid step), the grid between them would show an interpolation
+        # whose extent is chance, not a measurement. (A cut corner's jump is left in: the
+        # side a projection takes there is the nearer one, for the trace as for a model.)
+        turns = tp.end_s[:-1][tp.turn_angle > REVERSAL]
+        if turns.size:
+            ds = s_u[k] - s_u[k - 1]
+            carried = 0.5 * (v_u[k] + v_u[k - 1]) * dt
+            across = np.searchsorted(turns, s_u[k]) > np.searchsorted(
+                turns, s_u[k - 1], side="right"
+            )
+            hole |= across & (ds > JUMP_K * carried) & (ds > step)
         grid, move = grid[~hole], move[~hole]
     v = np.interp(grid, s_u, v_u)
     keep = tp.is_feed[move]

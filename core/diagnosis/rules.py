@@ -7,6 +7,8 @@ follows.
 
 from __future__ import annotations
 
+import math
+
 # ---------------------------------------------------------------- the gap, on the path
 #: Comparison step along the path (mm); coarser for long programs (MAX_POINTS).
 STEP = 0.1
@@ -16,6 +18,10 @@ MAX_POINTS = 200_000
 TIME_FLOOR = 0.02
 #: Samples further apart than this many sample periods leave a hole: not compared.
 GAP_PERIODS = 20
+#: ... nor across a turn of the path by more than REVERSAL (rad) whose places on either side
+#: are further apart than JUMP_K times the distance the measured speed covers between them.
+REVERSAL = 5.0 * math.pi / 6.0
+JUMP_K = 4.0
 #: Stretches of one run used for calibration / held-out data (alternating).
 CHUNKS = 16
 #: Every stretch is cut into this many pieces of equal length: the samples of the decision
