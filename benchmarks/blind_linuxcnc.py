@@ -211,7 +211,7 @@ CONTROL = Variant("unchanged", "unchanged machine", None, ALL)
 #: value from the range of its kind (seeded by the case), so that neither the programs nor
 #: the settings are ones the effects and the decision rule were developed on. The values of
 #: the fixed sets lie inside these ranges.
-DRAWN = {"drawn7", "drawn8", "drawn9", "drawn10", "drawn11", "drawn12", "drawn13", "drawn14"}
+DRAWN = {name for name in SEEDS if name.startswith("drawn")}
 
 
 def _u(rng: np.random.Generator, lo: float, hi: float, digits: int = 0) -> float:
