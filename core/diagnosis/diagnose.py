@@ -17,7 +17,9 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    constants are in :mod:`core.diagnosis.rules`): it must reduce the squared gap on them
    significantly (a sign-flip test over pieces of the held-out stretches, p <= SIG_P), by more than
    the noise floor (the machine file's, from ``ncperf calibrate``, else estimated from the
-   trace, and never under MIN_FEED_SHARE of F) and by at least BEST_SHARE of the gap. Among
+   trace, and never under MIN_FEED_SHARE of F) and by at least BEST_SHARE of the gap (or,
+   where it removes most of the gap -- MOST_SHARE -- significantly, by MOST_FLOOR of the
+   floor: no patch for what the model leaves out does that). Among
    the effects that clear it, those not significantly worse than the best, or leaving a gap
    within TIE_SHARE of its gap, are equally good: the rapids, which no fit sees, drop those
    they show wrong (a rapid gap over twice the least and the floor); then one the machine
@@ -67,6 +69,8 @@ from core.diagnosis.rules import (
     GAP_LABELS,
     MAX_CHOSEN,
     MIN_FEED_SHARE,
+    MOST_FLOOR,
+    MOST_SHARE,
     NOISE_K,
     PER_MIN,
     SIG_P,
@@ -306,14 +310,18 @@ def clears(g_before: float, g_after: float, p: float, floor: float, share: float
     after it, and the p value of the reduction): it removes at least ``share`` of the gap,
     at least the floor, and significantly -- p <= SIG_P, or STRONG_K times the floor where
     it shows in too few places for the test; or CLEAR_SHARE of the gap at p <= CLEAR_P and
-    CLEAR_FLOOR of the floor."""
+    CLEAR_FLOOR of the floor; or MOST_SHARE of the gap at p <= SIG_P and MOST_FLOOR of the
+    floor."""
     gain = g_before - g_after
     if not (g_before > 0 and gain / g_before >= share):
         return False
     if gain >= floor and (p <= SIG_P or gain >= STRONG_K * floor):
         return True
     # a large share of the gap, removed far beyond chance: half the floor will do
-    return gain / g_before >= CLEAR_SHARE and p <= CLEAR_P and gain >= CLEAR_FLOOR * floor
+    if gain / g_before >= CLEAR_SHARE and p <= CLEAR_P and gain >= CLEAR_FLOOR * floor:
+        return True
+    # most of the gap, significantly: no patch for what the model leaves out does that
+    return gain / g_before >= MOST_SHARE and p <= SIG_P and gain >= MOST_FLOOR * floor
 
 
 def add_effects(

@@ -28,6 +28,11 @@ from core.model.toolpath import ToolPath
 PLANS = 2
 
 
+def points_1d(p: Param) -> int:
+    """Points of ``p``'s 1-D search grid: its own, or GRID_1D."""
+    return GRID_1D if p.points is None else p.points
+
+
 def grid(p: Param, count: int) -> NDArray[np.float64]:
     if p.log and p.low > 0:
         g = np.geomspace(p.low, p.high, count)
@@ -117,7 +122,7 @@ def fit(
         return result(min(ends, key=score))
     if len(params) == 1:
         p = params[0]
-        candidates = [{p.name: float(x)} for x in grid(p, GRID_1D)]
+        candidates = [{p.name: float(x)} for x in grid(p, points_1d(p))]
     else:
         per = GRID_2D if len(params) == 2 else GRID_ND
         grids = [grid(p, per) for p in params]
@@ -134,7 +139,7 @@ def fit(
         # speed under the programmed feed): scan each parameter on the fine 1-D grid, the
         # others held at the best so far.
         for p in params:
-            line = [best | {p.name: float(x)} for x in grid(p, GRID_1D)]
+            line = [best | {p.name: float(x)} for x in grid(p, points_1d(p))]
             best = min([best, *line], key=score)
     return result(_refined(eff, best, defaults, score))
 
@@ -174,14 +179,14 @@ def _staged(
         for stage in stages:
             for _ in range(2):
                 for p in (by_name[n] for n in stage):
-                    line = [best | {p.name: float(x)} for x in grid(p, GRID_1D)]
+                    line = [best | {p.name: float(x)} for x in grid(p, points_1d(p))]
                     best = min([best, *line], key=score)
         return best
 
     first = [by_name[n] for n in eff.stages[0]]
     best = dict(defaults)
     if len(first) <= 3:
-        per = GRID_1D if len(first) == 1 else GRID_2D if len(first) == 2 else GRID_ND
+        per = points_1d(first[0]) if len(first) == 1 else GRID_2D if len(first) == 2 else GRID_ND
         grids = [grid(p, per) for p in first]
         mesh = np.meshgrid(*grids, indexing="ij")
         candidates = [best] + [
@@ -213,7 +218,7 @@ def _refined(
     # (in log space for log parameters) every round.
     brackets = {}
     for p in params:
-        g = grid(p, GRID_1D)
+        g = grid(p, points_1d(p))
         k = int(np.argmin(np.abs(g - best[p.name])))
         brackets[p.name] = (float(g[max(k - 1, 0)]), float(g[min(k + 1, g.size - 1)]))
     for _ in range(REFINE):

@@ -57,6 +57,9 @@ class Param:
     log : bool
         Search in log space (scale-like parameters spanning decades).
     integer : bool
+    points : int, optional
+        Points of the parameter's 1-D search grid (None: the fit's GRID_1D): more for a
+        parameter whose effect on the gap has narrow valleys between the grid's points.
     """
 
     name: str
@@ -66,6 +69,7 @@ class Param:
     unit: str = ""
     log: bool = False
     integer: bool = False
+    points: int | None = None
 
     def default_for(self, machine: Machine) -> float:
         d = self.default

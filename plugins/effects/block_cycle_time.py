@@ -21,7 +21,11 @@ def _apply(setup, p):
 
 EFFECT = Effect(
     name="block_cycle_time",
-    params=(Param("t_block", 0.0001, 0.05, lambda m: m.interpolation_time, unit="s", log=True),),
+    params=(
+        Param(
+            "t_block", 0.0001, 0.05, lambda m: m.interpolation_time, unit="s", log=True, points=31
+        ),
+    ),
     apply=_apply,
     doc="effective block time differs from t_int (model 3)",
 )
