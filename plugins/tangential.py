@@ -328,9 +328,9 @@ def linuxcnc_choice(
     is between the other two. Ties go to the parabolic blend (the first of the three).
 
     Returns, per junction: the mode (0 arc, 1 parabolic, 2 tangent kink), the speed it
-    crosses the junction at (a parabolic blend: the blend speed the planner computes while
-    running, with the segments' halved accelerations; the tool runs the blend's two halves
-    at that speed on average, so it costs the time of that speed), and the share of the
+    crosses the junction at (a parabolic blend: the speed that costs the time of the
+    segments' overlap, :func:`parabolic_time_speed`, from the blend speed the planner
+    computes while running with the segments' halved accelerations), and the share of the
     tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio). ``caps``: the two
     segments' top speeds (:func:`segment_caps`); ``phi``: the direction change the blend
     arc is laid for; ``refused``: junctions whose arc LinuxCNC refuses
@@ -342,8 +342,9 @@ def linuxcnc_choice(
     t_int = machine.interpolation_time
     l0, l1 = tp.length[k0], tp.length[k1]
     f0, f1 = caps
-    cos_half = np.cos(beta / 2.0)
-    sin_half = np.sin(beta / 2.0)
+    # (the angle between the segments' acceleration directions, not their tangents: an arc
+    # after the junction leans towards its centre)
+    sin_half, cos_half = _blend_half_angle(tp, j, a1)
     # the program's G64 P bounds a parabolic blend; without one (NaN) nothing does
     tol = np.nan_to_num(tp.tolerance[j], nan=0.0)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -370,9 +371,12 @@ def linuxcnc_choice(
     perf = np.stack([perf_arc, np.nan_to_num(perf_parabolic), np.nan_to_num(perf_tangent)])
     # the first of parabolic, tangent, arc that is strictly best (find_max_element)
     mode = np.where((perf[0] > perf[1]) & (perf[0] > perf[2]), 0, np.where(perf[2] > perf[1], 2, 1))
-    speed = np.where(
-        mode == 0, arc_feed, np.where(mode == 1, np.fmin(run[0], run[1]), perf_tangent)
-    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # a parabolic blend overlaps the segments: the one before brakes from its blend
+        # speed to a stop while the one after starts from rest; it costs the time of a
+        # corner crossed at u (what it saves beyond a corner at full speed is not modelled)
+        u, _ = parabolic_time_speed(run[0], a0 * 0.5, a1 * 0.5, f1)
+    speed = np.where(mode == 0, arc_feed, np.where(mode == 1, u, perf_tangent))
     share = np.where(mode == 1, 0.5, np.where(mode == 2, 1.0 - LCNC_KINK_RATIO, 1.0))
     return mode, speed, share
 
@@ -402,6 +406,78 @@ def _path_acceleration(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> 
     a = lowest_axis(tp.axis_share, k, acc)[0]
     a = np.where(np.isfinite(a), a, acc.min())
     return np.where(tp.is_arc[k], a * LCNC_TANGENTIAL_RATIO, a)
+
+
+def _blend_half_angle(
+    tp: ToolPath, j: NDArray[np.int64], a_next: NDArray
+) -> tuple[NDArray, NDArray]:
+    """cos and sin of the intersection half-angle theta LinuxCNC's parabolic blend speed
+    works with (tp.c ``tpComputeBlendVelocity``: theta = acos(-u1.u2) / 2): u1 the direction
+    the segment before accelerates in at its end, u2 the one after at its start
+    (tc.c ``tcGetEndAccelUnitVector``, ``tcGetStartAccelUnitVector``). A line's is its
+    direction; an arc's end its tangent in its plane (a helix's rise left out); an arc's start
+    the tangent in its plane at its overall acceleration ``a_next`` (mm/s^2) plus the
+    direction to its centre at (F / 2)^2 / R, normalised. Between lines, with b the
+    direction change, cos theta = sin(b / 2) and sin theta = cos(b / 2). A line into a
+    helix of 4 mm radius at F3000 with 1000 mm/s^2: the start leans atan(156.25 / 1000) =
+    8.9 deg towards the centre, a tolerance bound of 2 sqrt(1000 T / cos theta) with
+    cos theta = sin(8.9 deg / 2) instead of a near tangent's."""
+    u1 = tp.tangent_end[j].copy()
+    u2 = tp.tangent_start[j + 1].copy()
+    for u, k, start in ((u1, j, False), (u2, j + 1, True)):
+        arc = tp.is_arc[k]
+        if not arc.any():
+            continue
+        ka = k[arc]
+        nrm = tp.normal[ka]
+        t = u[arc]
+        t -= np.sum(t * nrm, axis=1)[:, None] * nrm  # in the arc's plane
+        t = g.unit(t)
+        if start:
+            inward = -g.radial(tp.start[ka], tp.center[ka], nrm)
+            r = g.norm(inward)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lean = (0.5 * tp.feed[ka]) ** 2 / r
+                t = g.unit(t * a_next[arc][:, None] + inward / r[:, None] * lean[:, None])
+        u[arc] = t
+    dot = np.clip(np.sum(u1 * u2, axis=1), -1.0, 1.0)
+    return np.sqrt((1.0 - dot) / 2.0), np.sqrt((1.0 + dot) / 2.0)
+
+
+def parabolic_time_speed(v_b, a_p, a_n, v_n):
+    """How LinuxCNC's parabolic blend costs time (tp.c ``tpDoParabolicBlending``,
+    ``tpUpdateBlend``): the speed ``u`` a corner crossed at constant speed would take to
+    cost the same, and the time ``gain`` (s) the blend saves beyond a corner at ``u``.
+
+    The segment before (tangential acceleration ``a_p``) brakes to a stop; when its speed
+    falls below its blend speed ``v_b`` the segment after starts from rest and speeds up at
+    its own acceleration ``a_n`` to its speed ``v_n`` while the first stops, over
+    t_b = v_b / a_p; the two motions add. (tpUpdateBlend raises the second's target with the
+    first's progress, up to its own blend speed; the traces show it does not bind: drawn13's
+    unchanged thread_milling_131007, helix into the radial line out, the line speeds up at
+    1000 mm/s^2 from the blend's start and runs at 11.2 mm/s when the helix stops, twice
+    the 5.7 mm/s blend speed; the suite's 10_helix_3d_polyline, a helix into a tangent
+    line at F3000, runs at up to 4414 mm/min while both move.)
+
+    From the blend's start, the two reach "the first stopped, the second at v_n" after
+    max(t_b, v_n / a_n); a corner crossed at u (the first brakes to u at its end, the second
+    speeds up from u), over the same path, takes longer by
+    A u^2 - (1 / a_p + 1 / a_n) u + t_b, A = 1 / (2 a_p v_b) + 1 / (2 a_n v_n). Equal at its
+    smaller root: about v_b a_n / (a_p + a_n) where A u^2 is small (a third of the blend
+    speed from a line into a helix, a_p 1000, a_n 500 mm/s^2). Without a root (nearly
+    tangent segments at full speed, whose motions add up to more than the feed) the corner
+    is crossed at min(v_b, v_n) and the blend saves what that still costs (gain)."""
+    b = 1.0 / a_p + 1.0 / a_n
+    a = 0.5 / (a_p * v_b) + 0.5 / (a_n * v_n)
+    t_b = v_b / a_p
+    disc = b * b - 4.0 * a * t_b
+    top = np.fmin(v_b, v_n)
+    with np.errstate(invalid="ignore"):
+        u = (b - np.sqrt(disc)) / (2.0 * a)
+    root = disc >= 0.0
+    u = np.where(root, np.fmin(u, top), top)
+    gain = np.where(root, 0.0, a * top * top - b * top + t_b)
+    return u, gain
 
 
 def _parabolic_speed(a0, a1, reach0, reach1, l0, l1, f0, f1, tol, sin_half):

@@ -266,10 +266,15 @@ def test_a_helix_corner_gets_a_parabolic_blend(nc):
       blend time min(10 / 40, 6.3623 / 38.07, max(40 / 900, 38.07 / 455.7)) = 0.08354 s;
       tolerance bound 2 sqrt(900 0.01 / sin 45) = 7.135 on both; promise cos45 7.135 / 2 =
       2.523 mm/s > 0.0952: parabolic.
-    Run at the blend speed with the halved accelerations (line 1000): 2 sqrt(1000 0.01 /
-    sin 45) = 7.5212 mm/s, and both blocks keep half their acceleration."""
+    Run with the halved accelerations (line 1000, helix 1012.6 / 2 = 506.3): the line's blend
+    speed 2 sqrt(1000 0.01 / sin 45) = 7.5212 mm/s, from which it brakes to a stop while the
+    helix starts from rest (the segments overlap), which costs the time of a corner crossed
+    at 7.5212 x 506.3 / (1000 + 506.3) = 2.528 mm/s; both blocks keep half their
+    acceleration."""
     ind = tangential(nc, helix_corner(), lcnc())
-    assert ind.feed[0] == pytest.approx(2.0 * math.sqrt(1000.0 * 0.01 / math.sin(math.pi / 4)))
+    v_b = 2.0 * math.sqrt(1000.0 * 0.01 / math.sin(math.pi / 4))
+    a_n = 2000.0 / (2 * math.pi / math.hypot(2 * math.pi, 1)) / 2 / 2
+    assert ind.feed[0] == pytest.approx(v_b * a_n / (1000.0 + a_n))
     assert ind.labels[ind.limit[0]].startswith("parabolic blend")
     assert ind.values["hold_mm"][0] == 0.0  # no arc inserted
     assert ind.values["acceleration_share"][0] == 0.5
@@ -294,15 +299,16 @@ def test_a_blend_arc_too_short_for_the_servo_period_gives_way_to_a_parabolic_ble
     0.0037922 mm, at most its length per servo period: 0.92946 mm/s at 4 ms, 0.74357 at
     5 ms (G64 P0.001). The parabolic blend promises cos45 2 sqrt(900 0.001 / sin45) / 2 =
     0.79776; the kink 20 0.1 / ((20 / T + 2000) / 2000) = 0.5714 (4 ms), 0.6667 (5 ms). At
-    4 ms the arc is best, at 5 ms the parabolic blend: run at 2 sqrt(1000 0.001 / sin45) =
-    2.3784 mm/s."""
+    4 ms the arc is best, at 5 ms the parabolic blend: its blend speed 2 sqrt(1000 0.001 /
+    sin45) = 2.3784 mm/s, braked to a stop while the next line starts from rest at the same
+    acceleration: the time of a corner at half of it, 1.1892 mm/s."""
     at4 = tangential(nc, turn(90.0, feed=20.0, tol=0.001), slow_servo(0.004))
     assert at4.values["hold_mm"][0] > 0.0
     assert at4.values["acceleration_share"][0] == 1.0
     at5 = tangential(nc, turn(90.0, feed=20.0, tol=0.001), slow_servo(0.005))
     assert at5.values["hold_mm"][0] == 0.0
     assert at5.values["acceleration_share"][0] == 0.5
-    assert at5.feed[0] == pytest.approx(2.0 * math.sqrt(1000.0 * 0.001 / math.sin(math.pi / 4)))
+    assert at5.feed[0] == pytest.approx(math.sqrt(1000.0 * 0.001 / math.sin(math.pi / 4)))
 
 
 def test_a_tangent_kink_takes_its_share_off_both_accelerations(nc):
