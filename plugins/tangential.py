@@ -445,6 +445,106 @@ def _blend_half_angle(
     return np.sqrt((1.0 - dot) / 2.0), np.sqrt((1.0 + dot) / 2.0)
 
 
+#: blendmath.h BLEND_ACC_RATIO_NORMAL: the share of an arc's acceleration LinuxCNC's canon
+#: leaves for the normal acceleration when it caps an arc's speed (sqrt(3) / 2).
+LCNC_NORMAL_RATIO = np.sqrt(3.0) / 2.0
+#: A label for the arcs' acceleration shares (a share, not a limit: no feed).
+ARC_SHARE = "LinuxCNC arc: tangential acceleration share"
+
+
+def linuxcnc_arc_ratio(tp: ToolPath, k: NDArray[np.int64], machine: Machine, share: NDArray):
+    """The share of the acceleration LinuxCNC 2.9 leaves for speed changes along the arcs
+    ``k`` (tc.c ``tcUpdateCircleAccRatio`` when a segment is finalised, blendmath.c
+    ``pmCircleActualMaxVel``): 0.5 (BLEND_ACC_RATIO_TANGENTIAL) where the arc's top speed
+    needs more than half its overall acceleration as normal acceleration, else
+    sqrt(1 - (a_n / a)^2).
+
+    - The top speed and acceleration are canon's (emccanon.cc ``ARC_FEED``): with a_p, v_p
+      the lower of the plane's two axes' limits and R_c = sqrt(dr^2 + R^2) (dr the spiral's
+      growth per radian), the planar speed v_pl = min(sqrt(sqrt(3)/2 a_p R_c), v_p); over the
+      spiral length S = hypot(R |angle|, spiral) and the whole length L = hypot(S, rise),
+      v = L / max(S / v_pl, straight-line time of the end point at the axes' speeds) and
+      a = L / max(S / a_p, the same at the axes' accelerations); the top speed is then at
+      most the path limit and the arc's length over one servo period
+      (``tcClampVelocityByLength``).
+    - The overall acceleration a_o = a x ``share`` (what the arc's junctions take: a
+      parabolic blend halves it, a kink its ratio; ``tcGetOverallMaxAccel``).
+    - a_n = v^2 / R_e with LinuxCNC's effective radius of a helix,
+      R_e = h^2 / R + R (``pmCircleEffectiveMinRadius``, h the WHOLE rise, not per turn):
+      three turns of pitch 2 mm round R 3.36 mm have R_e = 36 / 3.36 + 3.36 = 14.07 mm, so
+      at v = 76.6 mm/s a_n = 417 < a_o / 2 = 500: the helix speeds up at
+      sqrt(1 - 0.417^2) = 0.909 of a_o, 909 mm/s^2 (drawn9's unchanged thread milling:
+      913); two turns of pitch 1 round R 2.69, R_e = 4.18, a_n = 1116: 0.5, 500 mm/s^2
+      (drawn13's: 500)."""
+    nrm = tp.normal[k]
+    start, end = tp.start[k], tp.end[k]
+    r0 = g.norm(g.radial(start, tp.center[k], nrm))
+    r1 = g.norm(g.radial(end, tp.center[k], nrm))
+    angle = np.abs(tp.sweep[k])
+    spiral = r1 - r0
+    r_min = np.fmin(r0, r1)
+    d = end - start
+    rise = np.abs(g.dot(d, nrm))
+    acc = np.asarray(machine.max_acceleration, dtype=np.float64)
+    vel = np.asarray(machine.max_feed, dtype=np.float64)
+    # the plane's two axes: all but the one the normal points along most
+    plane = np.ones((k.size, 3), dtype=bool)
+    plane[np.arange(k.size), np.argmax(np.abs(nrm), axis=1)] = False
+    a_p = np.where(plane, acc, np.inf).min(axis=1)
+    v_p = np.where(plane, vel, np.inf).min(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dr = np.where(angle > 0.0, spiral / angle, 0.0)
+        v_pl = np.fmin(np.sqrt(LCNC_NORMAL_RATIO * a_p * np.hypot(dr, r_min)), v_p)
+        s_len = np.hypot(r_min * angle, spiral)
+        length = np.hypot(s_len, rise)
+        v = length / np.fmax(s_len / v_pl, (np.abs(d) / vel).max(axis=1))
+        a = length / np.fmax(s_len / a_p, (np.abs(d) / acc).max(axis=1))
+        v = np.fmin(
+            np.fmin(v, machine.max_path_feed),
+            tp.length[k] / (machine.interpolation_time / LCNC_MIN_SEGMENT_CYCLES),
+        )
+        a_o = a * share
+        r_e = rise * rise / r_min + r_min
+        a_n = v * v / r_e
+        ratio = np.where(
+            a_n > LCNC_TANGENTIAL_RATIO * a_o,
+            LCNC_TANGENTIAL_RATIO,
+            np.sqrt(np.clip(1.0 - (a_n / a_o) ** 2, 0.0, 1.0)),
+        )
+    return np.where(np.isfinite(ratio), ratio, LCNC_TANGENTIAL_RATIO)
+
+
+def _linuxcnc_arc_shares(
+    tp: ToolPath, machine: Machine, j: NDArray[np.int64], share: NDArray | None
+) -> list[Indicator]:
+    """An element indicator of the feed arcs whose LinuxCNC share (:func:`linuxcnc_arc_ratio`)
+    is not the 0.5 the ``linuxcnc-sim`` preset folds for all arcs (``arc_acceleration``):
+    their ``acceleration_share``, relative to it (up to 2)."""
+    k = np.flatnonzero(tp.is_arc & tp.is_feed)
+    if k.size == 0:
+        return []
+    moves = np.ones(tp.n)
+    if share is not None and j.size:
+        np.minimum.at(moves, j, share)
+        np.minimum.at(moves, j + 1, share)
+    rel = linuxcnc_arc_ratio(tp, k, machine, moves[k]) / LCNC_TANGENTIAL_RATIO
+    other = rel != 1.0
+    if not other.any():
+        return []
+    k, rel = k[other], rel[other]
+    return [
+        Indicator(
+            name=NAME,
+            at="element",
+            index=k,
+            feed=np.full(k.size, np.inf),
+            limit=np.zeros(k.size, dtype=np.int64),
+            labels=(ARC_SHARE,),
+            values={"acceleration_share": rel},
+        )
+    ]
+
+
 def parabolic_time_speed(v_b, a_p, a_n, v_n, period=0.0):
     """How LinuxCNC's parabolic blend costs time (tp.c ``tpDoParabolicBlending``,
     ``tpUpdateBlend``): the speed ``u`` a corner crossed at constant speed would take to
@@ -646,7 +746,11 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
         extra = {"acceleration_share": share}
         feed = np.where(tangent & (tit > 0.0), np.inf, feed)
     limit = np.where(tit == 0.0, LABELS.index(NO_BLEND), limit)
+    arcs: list[Indicator] = []
+    if machine.corner_blending == "linuxcnc":
+        arcs = _linuxcnc_arc_shares(tp, machine, j, extra.get("acceleration_share"))
     return [
+        *arcs,
         Indicator(
             name=NAME,
             at="junction",
@@ -664,5 +768,5 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
                 "travel_mm": nan_to_num(inserted * phi / 2.0, nan=0.0, posinf=0.0),
             }
             | extra,
-        )
+        ),
     ]
