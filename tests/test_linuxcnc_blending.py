@@ -457,3 +457,60 @@ def test_nearly_tangent_segments_at_full_speed_overlap_faster_than_any_corner():
     t_c = _corner_time(50.0, 50.0, 500.0, 1000.0, 50.0, x)
     assert t_c == pytest.approx(0.125, abs=1e-5)
     assert float(gain[0]) == pytest.approx(t_c - t_l, abs=1e-5)
+
+
+THREAD_3X2 = """(thread milling pitch 2, R3.36, 3 turns, F2400, as drawn9's thread_milling_91007)
+G21 G17 G90 G94
+G64 P0.01 Q0
+G0 X83.6208 Y72.8935 Z5
+G1 X83.6208 Y72.8935 Z-7 F800
+G1 X86.9796 Y72.8935 F2400
+G2 X86.9796 Y72.8935 Z-1 I-3.3589 J0 P3
+G1 X83.6208 Y72.8935
+G0 Z5
+M2
+"""
+
+
+@pytest.mark.parametrize(("turns", "pitch", "expected"), [(3, 2.0, "sqrt"), (1, 1.0, 0.5)])
+def test_linuxcnc_helix_tangential_share(tmp_path, turns, pitch, expected):
+    """LinuxCNC's share of a helix's acceleration for speed changes along it
+    (tcUpdateCircleAccRatio, pmCircleActualMaxVel), on the preset's mill (2000 mm/s^2,
+    250 mm/s per axis). Canon: v_pl = sqrt(sqrt(3)/2 2000 3.3589) = 76.28 mm/s; S = 3.3589 2 pi
+    turns, L = hypot(S, rise); v = L / (S / 76.28) (the end point's straight-line time, the
+    rise at 250 mm/s, is shorter); a = L / (S / 2000). Both junctions parabolic: a_o = a / 2.
+    LinuxCNC's helix radius over the whole rise, R_e = rise^2 / 3.3589 + 3.3589:
+    - 3 turns of pitch 2 (drawn9's thread milling): rise 6, R_e = 14.077, a_n = v^2 / R_e =
+      417 < a_o / 2 (502): share sqrt(1 - (a_n / a_o)^2) = 0.910 (the trace: 913 mm/s^2 of the
+      1000 the halved acceleration leaves);
+    - one turn of pitch 1: R_e = 3.6566, a_n = 1595 > a_o / 2: 0.5.
+    The profile's helix acceleration is the lowest axis's over its share times the preset's
+    arc factor 0.5, the parabolic 0.5, and the share over 0.5."""
+    from core import Ncperf, load_preset
+    from core.engine.effects import setup_for
+
+    text = THREAD_3X2.replace("Z-1 I", f"Z{-7 + turns * pitch:g} I").replace("P3", f"P{turns}")
+    prog = tmp_path / "thread.ngc"
+    prog.write_text(text)
+    ncp = Ncperf()
+    tp = ncp.extract(str(prog))
+    m = load_preset("linuxcnc-sim")
+    r, rise = 3.3589, turns * pitch
+    s_len = r * 2 * math.pi * turns
+    length = math.hypot(s_len, rise)
+    v = length / (s_len / math.sqrt(math.sqrt(3) / 2 * 2000.0 * r))
+    a_o = length / (s_len / 2000.0) / 2
+    a_n = v * v / (rise * rise / r + r)
+    share = math.sqrt(1 - (a_n / a_o) ** 2) if expected == "sqrt" else 0.5
+    if expected == "sqrt":
+        assert a_n < a_o / 2 and share == pytest.approx(0.909, abs=0.002)
+    else:
+        assert a_n > a_o / 2
+    k = int(np.flatnonzero(tp.is_arc)[0])
+    prof = ncp.predict(tp, setup_for(m, ncp.effects())).profile
+    # the helix's tangential acceleration: lowest axis over its shares, the preset's 0.5, the
+    # parabolic blends' 0.5, and LinuxCNC's share over 0.5
+    from plugins.feed_limit import lowest_axis
+
+    a_axes = lowest_axis(tp.axis_share, np.array([k]), np.asarray(m.max_acceleration))[0][0]
+    assert prof.a_up[k] == pytest.approx(a_axes * 0.5 * 0.5 * share / 0.5, rel=1e-3)
