@@ -328,9 +328,9 @@ def linuxcnc_choice(
     is between the other two. Ties go to the parabolic blend (the first of the three).
 
     Returns, per junction: the mode (0 arc, 1 parabolic, 2 tangent kink), the speed it
-    crosses the junction at (a parabolic blend: the blend speed the planner computes while
-    running, with the segments' halved accelerations; the tool runs the blend's two halves
-    at that speed on average, so it costs the time of that speed), and the share of the
+    crosses the junction at (a parabolic blend: the speed that costs the time of the
+    segments' overlap, :func:`parabolic_time_speed`, from the blend speed the planner
+    computes while running with the segments' halved accelerations), and the share of the
     tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio). ``caps``: the two
     segments' top speeds (:func:`segment_caps`); ``phi``: the direction change the blend
     arc is laid for; ``refused``: junctions whose arc LinuxCNC refuses
@@ -342,8 +342,9 @@ def linuxcnc_choice(
     t_int = machine.interpolation_time
     l0, l1 = tp.length[k0], tp.length[k1]
     f0, f1 = caps
-    cos_half = np.cos(beta / 2.0)
-    sin_half = np.sin(beta / 2.0)
+    # (the angle between the segments' acceleration directions, not their tangents: an arc
+    # after the junction leans towards its centre)
+    sin_half, cos_half = _blend_half_angle(tp, j, a1)
     # the program's G64 P bounds a parabolic blend; without one (NaN) nothing does
     tol = np.nan_to_num(tp.tolerance[j], nan=0.0)
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
@@ -370,9 +371,13 @@ def linuxcnc_choice(
     perf = np.stack([perf_arc, np.nan_to_num(perf_parabolic), np.nan_to_num(perf_tangent)])
     # the first of parabolic, tangent, arc that is strictly best (find_max_element)
     mode = np.where((perf[0] > perf[1]) & (perf[0] > perf[2]), 0, np.where(perf[2] > perf[1], 2, 1))
-    speed = np.where(
-        mode == 0, arc_feed, np.where(mode == 1, np.fmin(run[0], run[1]), perf_tangent)
-    )
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # a parabolic blend overlaps the segments: the one before brakes from its blend
+        # speed to a stop while the one after starts from rest; it costs the time of a
+        # corner crossed at u (what it saves beyond a corner at full speed is not modelled)
+        servo = t_int / LCNC_MIN_SEGMENT_CYCLES
+        u, _ = parabolic_time_speed(run[0], a0 * 0.5, a1 * 0.5, f1, servo)
+    speed = np.where(mode == 0, arc_feed, np.where(mode == 1, u, perf_tangent))
     share = np.where(mode == 1, 0.5, np.where(mode == 2, 1.0 - LCNC_KINK_RATIO, 1.0))
     return mode, speed, share
 
@@ -402,6 +407,183 @@ def _path_acceleration(tp: ToolPath, k: NDArray[np.int64], machine: Machine) -> 
     a = lowest_axis(tp.axis_share, k, acc)[0]
     a = np.where(np.isfinite(a), a, acc.min())
     return np.where(tp.is_arc[k], a * LCNC_TANGENTIAL_RATIO, a)
+
+
+def _blend_half_angle(
+    tp: ToolPath, j: NDArray[np.int64], a_next: NDArray
+) -> tuple[NDArray, NDArray]:
+    """cos and sin of the intersection half-angle theta LinuxCNC's parabolic blend speed
+    works with (tp.c ``tpComputeBlendVelocity``: theta = acos(-u1.u2) / 2): u1 the direction
+    the segment before accelerates in at its end, u2 the one after at its start
+    (tc.c ``tcGetEndAccelUnitVector``, ``tcGetStartAccelUnitVector``). A line's is its
+    direction; an arc's end its tangent in its plane (a helix's rise left out); an arc's start
+    the tangent in its plane at its overall acceleration ``a_next`` (mm/s^2) plus the
+    direction to its centre at (F / 2)^2 / R, normalised. Between lines, with b the
+    direction change, cos theta = sin(b / 2) and sin theta = cos(b / 2). A line into a
+    helix of 4 mm radius at F3000 with 1000 mm/s^2: the start leans atan(156.25 / 1000) =
+    8.9 deg towards the centre, a tolerance bound of 2 sqrt(1000 T / cos theta) with
+    cos theta = sin(8.9 deg / 2) instead of a near tangent's."""
+    u1 = tp.tangent_end[j].copy()
+    u2 = tp.tangent_start[j + 1].copy()
+    for u, k, start in ((u1, j, False), (u2, j + 1, True)):
+        arc = tp.is_arc[k]
+        if not arc.any():
+            continue
+        ka = k[arc]
+        nrm = tp.normal[ka]
+        t = u[arc]
+        t -= np.sum(t * nrm, axis=1)[:, None] * nrm  # in the arc's plane
+        t = g.unit(t)
+        if start:
+            inward = -g.radial(tp.start[ka], tp.center[ka], nrm)
+            r = g.norm(inward)
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lean = (0.5 * tp.feed[ka]) ** 2 / r
+                t = g.unit(t * a_next[arc][:, None] + inward / r[:, None] * lean[:, None])
+        u[arc] = t
+    dot = np.clip(np.sum(u1 * u2, axis=1), -1.0, 1.0)
+    return np.sqrt((1.0 - dot) / 2.0), np.sqrt((1.0 + dot) / 2.0)
+
+
+#: blendmath.h BLEND_ACC_RATIO_NORMAL: the share of an arc's acceleration LinuxCNC's canon
+#: leaves for the normal acceleration when it caps an arc's speed (sqrt(3) / 2).
+LCNC_NORMAL_RATIO = np.sqrt(3.0) / 2.0
+#: A label for the arcs' acceleration shares (a share, not a limit: no feed).
+ARC_SHARE = "LinuxCNC arc: tangential acceleration share"
+
+
+def linuxcnc_arc_ratio(tp: ToolPath, k: NDArray[np.int64], machine: Machine, share: NDArray):
+    """The share of the acceleration LinuxCNC 2.9 leaves for speed changes along the arcs
+    ``k`` (tc.c ``tcUpdateCircleAccRatio`` when a segment is finalised, blendmath.c
+    ``pmCircleActualMaxVel``): 0.5 (BLEND_ACC_RATIO_TANGENTIAL) where the arc's top speed
+    needs more than half its overall acceleration as normal acceleration, else
+    sqrt(1 - (a_n / a)^2).
+
+    - The top speed and acceleration are canon's (emccanon.cc ``ARC_FEED``): with a_p, v_p
+      the lower of the plane's two axes' limits and R_c = sqrt(dr^2 + R^2) (dr the spiral's
+      growth per radian), the planar speed v_pl = min(sqrt(sqrt(3)/2 a_p R_c), v_p); over the
+      spiral length S = hypot(R |angle|, spiral) and the whole length L = hypot(S, rise),
+      v = L / max(S / v_pl, straight-line time of the end point at the axes' speeds) and
+      a = L / max(S / a_p, the same at the axes' accelerations); the top speed is then at
+      most the path limit and the arc's length over one servo period
+      (``tcClampVelocityByLength``).
+    - The overall acceleration a_o = a x ``share`` (what the arc's junctions take: a
+      parabolic blend halves it, a kink its ratio; ``tcGetOverallMaxAccel``).
+    - a_n = v^2 / R_e with LinuxCNC's effective radius of a helix,
+      R_e = h^2 / R + R (``pmCircleEffectiveMinRadius``, h the WHOLE rise, not per turn):
+      three turns of pitch 2 mm round R 3.36 mm have R_e = 36 / 3.36 + 3.36 = 14.07 mm, so
+      at v = 76.6 mm/s a_n = 417 < a_o / 2 = 500: the helix speeds up at
+      sqrt(1 - 0.417^2) = 0.909 of a_o, 909 mm/s^2 (drawn9's unchanged thread milling:
+      913); two turns of pitch 1 round R 2.69, R_e = 4.18, a_n = 1116: 0.5, 500 mm/s^2
+      (drawn13's: 500)."""
+    nrm = tp.normal[k]
+    start, end = tp.start[k], tp.end[k]
+    r0 = g.norm(g.radial(start, tp.center[k], nrm))
+    r1 = g.norm(g.radial(end, tp.center[k], nrm))
+    angle = np.abs(tp.sweep[k])
+    spiral = r1 - r0
+    r_min = np.fmin(r0, r1)
+    d = end - start
+    rise = np.abs(g.dot(d, nrm))
+    acc = np.asarray(machine.max_acceleration, dtype=np.float64)
+    vel = np.asarray(machine.max_feed, dtype=np.float64)
+    # the plane's two axes: all but the one the normal points along most
+    plane = np.ones((k.size, 3), dtype=bool)
+    plane[np.arange(k.size), np.argmax(np.abs(nrm), axis=1)] = False
+    a_p = np.where(plane, acc, np.inf).min(axis=1)
+    v_p = np.where(plane, vel, np.inf).min(axis=1)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        dr = np.where(angle > 0.0, spiral / angle, 0.0)
+        v_pl = np.fmin(np.sqrt(LCNC_NORMAL_RATIO * a_p * np.hypot(dr, r_min)), v_p)
+        s_len = np.hypot(r_min * angle, spiral)
+        length = np.hypot(s_len, rise)
+        v = length / np.fmax(s_len / v_pl, (np.abs(d) / vel).max(axis=1))
+        a = length / np.fmax(s_len / a_p, (np.abs(d) / acc).max(axis=1))
+        v = np.fmin(
+            np.fmin(v, machine.max_path_feed),
+            tp.length[k] / (machine.interpolation_time / LCNC_MIN_SEGMENT_CYCLES),
+        )
+        a_o = a * share
+        r_e = rise * rise / r_min + r_min
+        a_n = v * v / r_e
+        ratio = np.where(
+            a_n > LCNC_TANGENTIAL_RATIO * a_o,
+            LCNC_TANGENTIAL_RATIO,
+            np.sqrt(np.clip(1.0 - (a_n / a_o) ** 2, 0.0, 1.0)),
+        )
+    return np.where(np.isfinite(ratio), ratio, LCNC_TANGENTIAL_RATIO)
+
+
+def _linuxcnc_arc_shares(
+    tp: ToolPath, machine: Machine, j: NDArray[np.int64], share: NDArray | None
+) -> list[Indicator]:
+    """An element indicator of the feed arcs whose LinuxCNC share (:func:`linuxcnc_arc_ratio`)
+    is not the 0.5 the ``linuxcnc-sim`` preset folds for all arcs (``arc_acceleration``):
+    their ``acceleration_share``, relative to it (up to 2)."""
+    k = np.flatnonzero(tp.is_arc & tp.is_feed)
+    if k.size == 0:
+        return []
+    moves = np.ones(tp.n)
+    if share is not None and j.size:
+        np.minimum.at(moves, j, share)
+        np.minimum.at(moves, j + 1, share)
+    rel = linuxcnc_arc_ratio(tp, k, machine, moves[k]) / LCNC_TANGENTIAL_RATIO
+    other = rel != 1.0
+    if not other.any():
+        return []
+    k, rel = k[other], rel[other]
+    return [
+        Indicator(
+            name=NAME,
+            at="element",
+            index=k,
+            feed=np.full(k.size, np.inf),
+            limit=np.zeros(k.size, dtype=np.int64),
+            labels=(ARC_SHARE,),
+            values={"acceleration_share": rel},
+        )
+    ]
+
+
+def parabolic_time_speed(v_b, a_p, a_n, v_n, period=0.0):
+    """How LinuxCNC's parabolic blend costs time (tp.c ``tpDoParabolicBlending``,
+    ``tpUpdateBlend``): the speed ``u`` a corner crossed at constant speed would take to
+    cost the same, and the time ``gain`` (s) the blend saves beyond a corner at ``u``.
+
+    The segment before (tangential acceleration ``a_p``) brakes to a stop; when its speed
+    falls below its blend speed ``v_b`` the segment after starts from rest and speeds up at
+    its own acceleration ``a_n`` to its speed ``v_n`` while the first stops, over
+    t_b = v_b / a_p; the two motions add. (tpUpdateBlend raises the second's target with the
+    first's progress, up to its own blend speed; the traces show it does not bind: drawn13's
+    unchanged thread_milling_131007, helix into the radial line out, the line speeds up at
+    1000 mm/s^2 from the blend's start and runs at 11.2 mm/s when the helix stops, twice
+    the 5.7 mm/s blend speed; the suite's 10_helix_3d_polyline, a helix into a tangent
+    line at F3000, runs at up to 4414 mm/min while both move.)
+
+    From the blend's start, the two reach "the first stopped, the second at v_n" after
+    max(t_b, v_n / a_n); a corner crossed at u (the first brakes to u at its end, the second
+    speeds up from u), over the same path, takes longer by
+    A u^2 - (1 / a_p + 1 / a_n) u + t_b, A = 1 / (2 a_p v_b) + 1 / (2 a_n v_n). Equal at its
+    smaller root: about v_b a_n / (a_p + a_n) where A u^2 is small (a third of the blend
+    speed from a line into a helix, a_p 1000, a_n 500 mm/s^2). The planner steps once a
+    servo ``period`` (s): the segments share at least the first's last step, so the overlap
+    lasts at least one period (t_b = max(v_b / a_p, period); at 5 ms, 90 degree corners of
+    lines blended at 2.38 mm/s and 1000 mm/s^2 overlap for one step, not 2.4 ms, and run
+    as corners at the blend speed: the planner-trace test of squares). Where no u up to
+    min(v_b, v_n) matches (the second segment speeding up faster than the first brakes; nearly
+    tangent segments at full speed, whose motions add up to more than the feed) the corner
+    is crossed at min(v_b, v_n) and the blend saves what that still costs (gain)."""
+    b = 1.0 / a_p + 1.0 / a_n
+    a = 0.5 / (a_p * v_b) + 0.5 / (a_n * v_n)
+    t_b = np.fmax(v_b / a_p, period)
+    disc = b * b - 4.0 * a * t_b
+    top = np.fmin(v_b, v_n)
+    with np.errstate(invalid="ignore"):
+        u = (b - np.sqrt(disc)) / (2.0 * a)
+    matched = (disc >= 0.0) & (u <= top)
+    u = np.where(matched, u, top)
+    gain = np.where(matched, 0.0, np.fmax(a * top * top - b * top + t_b, 0.0))
+    return u, gain
 
 
 def _parabolic_speed(a0, a1, reach0, reach1, l0, l1, f0, f1, tol, sin_half):
@@ -564,7 +746,11 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
         extra = {"acceleration_share": share}
         feed = np.where(tangent & (tit > 0.0), np.inf, feed)
     limit = np.where(tit == 0.0, LABELS.index(NO_BLEND), limit)
+    arcs: list[Indicator] = []
+    if machine.corner_blending == "linuxcnc":
+        arcs = _linuxcnc_arc_shares(tp, machine, j, extra.get("acceleration_share"))
     return [
+        *arcs,
         Indicator(
             name=NAME,
             at="junction",
@@ -582,5 +768,5 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
                 "travel_mm": nan_to_num(inserted * phi / 2.0, nan=0.0, posinf=0.0),
             }
             | extra,
-        )
+        ),
     ]

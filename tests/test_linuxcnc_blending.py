@@ -266,10 +266,25 @@ def test_a_helix_corner_gets_a_parabolic_blend(nc):
       blend time min(10 / 40, 6.3623 / 38.07, max(40 / 900, 38.07 / 455.7)) = 0.08354 s;
       tolerance bound 2 sqrt(900 0.01 / sin 45) = 7.135 on both; promise cos45 7.135 / 2 =
       2.523 mm/s > 0.0952: parabolic.
-    Run at the blend speed with the halved accelerations (line 1000): 2 sqrt(1000 0.01 /
-    sin 45) = 7.5212 mm/s, and both blocks keep half their acceleration."""
+    Run with the halved accelerations (line 1000, helix 1012.6 / 2 = 506.3). The blend speed's
+    tolerance bound works with the angle between the directions the segments accelerate in
+    (tpComputeBlendVelocity): the line's +X; the helix's start leans towards its centre,
+    (0, -1, 0) 1012.6 + (-1, 0, 0) (40 / 2)^2 / 4 = (-100, -1012.6, 0), dot -0.09828,
+    cos theta = sqrt((1 + 0.09828) / 2) = 0.74104 (the tangents' 90 degrees alone give
+    0.70711): v_b = 2 sqrt(1000 0.01 / 0.74104) = 7.3468 mm/s. The line brakes from it to a
+    stop while the helix starts from rest (the segments overlap), which costs the time of a
+    corner crossed at the smaller root of A u^2 - (1 / 1000 + 1 / 506.3) u + v_b / 1000,
+    A = 1 / (2 1000 v_b) + 1 / (2 506.3 40): u = 2.696 mm/s; both blocks keep half their
+    acceleration."""
     ind = tangential(nc, helix_corner(), lcnc())
-    assert ind.feed[0] == pytest.approx(2.0 * math.sqrt(1000.0 * 0.01 / math.sin(math.pi / 4)))
+    dot = -100.0 / math.hypot(100.0, 1012.6)
+    v_b = 2.0 * math.sqrt(1000.0 * 0.01 / math.sqrt((1.0 - dot) / 2.0))
+    a_n = 2000.0 / (2 * math.pi / math.hypot(2 * math.pi, 1)) / 2 / 2
+    big_a = 1 / (2 * 1000.0 * v_b) + 1 / (2 * a_n * 40.0)
+    b = 1 / 1000.0 + 1 / a_n
+    u = (b - math.sqrt(b * b - 4 * big_a * v_b / 1000.0)) / (2 * big_a)
+    assert u == pytest.approx(2.696, abs=0.001)
+    assert ind.feed[0] == pytest.approx(u)
     assert ind.labels[ind.limit[0]].startswith("parabolic blend")
     assert ind.values["hold_mm"][0] == 0.0  # no arc inserted
     assert ind.values["acceleration_share"][0] == 0.5
@@ -294,15 +309,22 @@ def test_a_blend_arc_too_short_for_the_servo_period_gives_way_to_a_parabolic_ble
     0.0037922 mm, at most its length per servo period: 0.92946 mm/s at 4 ms, 0.74357 at
     5 ms (G64 P0.001). The parabolic blend promises cos45 2 sqrt(900 0.001 / sin45) / 2 =
     0.79776; the kink 20 0.1 / ((20 / T + 2000) / 2000) = 0.5714 (4 ms), 0.6667 (5 ms). At
-    4 ms the arc is best, at 5 ms the parabolic blend: run at 2 sqrt(1000 0.001 / sin45) =
-    2.3784 mm/s."""
+    4 ms the arc is best, at 5 ms the parabolic blend: its blend speed 2 sqrt(1000 0.001 /
+    sin45) = 2.3784 mm/s, braked to a stop while the next line starts from rest at the same
+    acceleration. The overlap would last 2.4 ms, but the planner steps every 5 ms and the
+    segments share a step: 5 ms, more than any corner up to the blend speed costs
+    (A u^2 - (2 / 1000) u + 0.005 has no root, A = 1 / (2 1000 2.3784) + 1 / (2 1000 20)):
+    the corner is crossed at the blend speed."""
     at4 = tangential(nc, turn(90.0, feed=20.0, tol=0.001), slow_servo(0.004))
     assert at4.values["hold_mm"][0] > 0.0
     assert at4.values["acceleration_share"][0] == 1.0
     at5 = tangential(nc, turn(90.0, feed=20.0, tol=0.001), slow_servo(0.005))
     assert at5.values["hold_mm"][0] == 0.0
     assert at5.values["acceleration_share"][0] == 0.5
-    assert at5.feed[0] == pytest.approx(2.0 * math.sqrt(1000.0 * 0.001 / math.sin(math.pi / 4)))
+    v_b = 2.0 * math.sqrt(1000.0 * 0.001 / math.sin(math.pi / 4))
+    big_a = 1 / (2 * 1000.0 * v_b) + 1 / (2 * 1000.0 * 20.0)
+    assert 0.002**2 - 4 * big_a * 0.005 < 0.0
+    assert at5.feed[0] == pytest.approx(v_b)
 
 
 def test_a_tangent_kink_takes_its_share_off_both_accelerations(nc):
@@ -355,3 +377,140 @@ def test_the_kink_test_sees_a_short_segments_length_over_one_servo_period(nc):
     near = tangential(nc, turn(0.2153, length=0.05, feed=100.0), lcnc())
     assert near.feed[0] == INF
     assert near.values["hold_mm"][0] == 0.0
+
+
+def _overlap_time(v_b, a_p, a_n, v_n, dt=1e-6):
+    """LinuxCNC's parabolic blend stepped in time (tp.c tpDoParabolicBlending, as the traces
+    show it): from the blend's start, the segment before brakes from v_b to a stop at a_p
+    while the one after speeds up from rest at a_n to v_n; returns the time until both are
+    done (the first stopped, the second at v_n) and the distance the second has run."""
+    t = x = 0.0
+    v1, v2 = v_b, 0.0
+    while v1 > 0.0 or v2 < v_n:
+        v1 = max(v1 - a_p * dt, 0.0)
+        v2n = min(v2 + a_n * dt, v_n)
+        x += 0.5 * (v2 + v2n) * dt
+        v2 = v2n
+        t += dt
+    return t, x
+
+
+def _corner_time(u, v_b, a_p, a_n, v_n, x_next):
+    """The same stretch (the first segment's last v_b^2 / (2 a_p), the second's first
+    ``x_next``) run as a corner crossed at u: the first at v_b until it brakes to u at its
+    end, the second from u up to v_n and on at v_n."""
+    d_p = v_b**2 / (2 * a_p)
+    brake = (v_b**2 - u**2) / (2 * a_p)
+    t = (d_p - brake) / v_b + (v_b - u) / a_p
+    up = (v_n**2 - u**2) / (2 * a_n)
+    return t + (v_n - u) / a_n + (x_next - up) / v_n
+
+
+@pytest.mark.parametrize(
+    ("v_b", "a_p", "a_n", "v_n"),
+    [(7.5, 1000.0, 500.0, 30.0), (2.4, 1000.0, 1000.0, 20.0), (5.7, 700.0, 1000.0, 30.0)],
+)
+def test_a_parabolic_blend_costs_the_time_of_its_corner_speed(v_b, a_p, a_n, v_n):
+    """The corner speed that stands for a parabolic blend, against the blend stepped in time
+    every microsecond: a line into a helix (thread milling: 7.5 mm/s, 1000 / 500 mm/s^2), two
+    lines at a 5 ms servo period, a corner whose second segment speeds up faster. The corner
+    crossed at u takes the time of the overlap to within 10 us; at u +- 10 % it does not."""
+    from plugins.tangential import parabolic_time_speed
+
+    u, gain = parabolic_time_speed(np.array([v_b]), a_p, a_n, np.array([v_n]))
+    u = float(u[0])
+    assert float(gain[0]) == 0.0 and 0.0 < u < v_b
+    t_l, x = _overlap_time(v_b, a_p, a_n, v_n)
+    assert _corner_time(u, v_b, a_p, a_n, v_n, x) == pytest.approx(t_l, abs=1e-5)
+    assert abs(_corner_time(0.9 * u, v_b, a_p, a_n, v_n, x) - t_l) > 1e-4
+    assert abs(_corner_time(1.1 * u, v_b, a_p, a_n, v_n, x) - t_l) > 1e-4
+
+
+def test_a_helix_into_a_line_overlaps_faster_than_a_corner_at_its_blend_speed():
+    """The thread milling helix into its radial line out (drawn13's unchanged
+    thread_milling_131007): blend speed 5.7 mm/s, the helix braking at 500, the line speeding
+    up at 1000 mm/s^2 to 30 mm/s. The corner speed that would match is above the blend speed
+    (5.98: the root), so the corner is crossed at 5.7 and the overlap saves what that still
+    costs, A 5.7^2 - 0.003 5.7 + 0.0114 > 0."""
+    from plugins.tangential import parabolic_time_speed
+
+    u, gain = parabolic_time_speed(np.array([5.7]), 500.0, 1000.0, np.array([30.0]))
+    assert float(u[0]) == 5.7
+    t_l, x = _overlap_time(5.7, 500.0, 1000.0, 30.0)
+    t_c = _corner_time(5.7, 5.7, 500.0, 1000.0, 30.0, x)
+    assert t_c > t_l
+    assert float(gain[0]) == pytest.approx(t_c - t_l, abs=1e-5)
+
+
+def test_nearly_tangent_segments_at_full_speed_overlap_faster_than_any_corner():
+    """A helix into a tangent line at F3000 (the suite's 10_helix_3d_polyline): blend speed
+    50 mm/s, the helix braking at 500, the line speeding up at 1000 mm/s^2. Stepped in time,
+    the two are done after 100 ms, the line 3.75 mm on; a corner crossed at full speed takes
+    125 ms over that path: no corner speed matches (no root), the corner is crossed at
+    50 mm/s and the overlap saves the 25 ms still left (gain, not modelled)."""
+    from plugins.tangential import parabolic_time_speed
+
+    u, gain = parabolic_time_speed(np.array([50.0]), 500.0, 1000.0, np.array([50.0]))
+    t_l, x = _overlap_time(50.0, 500.0, 1000.0, 50.0)
+    assert t_l == pytest.approx(0.1, abs=1e-5) and x == pytest.approx(3.75, abs=1e-4)
+    assert float(u[0]) == 50.0
+    t_c = _corner_time(50.0, 50.0, 500.0, 1000.0, 50.0, x)
+    assert t_c == pytest.approx(0.125, abs=1e-5)
+    assert float(gain[0]) == pytest.approx(t_c - t_l, abs=1e-5)
+
+
+THREAD_3X2 = """(thread milling pitch 2, R3.36, 3 turns, F2400, as drawn9's thread_milling_91007)
+G21 G17 G90 G94
+G64 P0.01 Q0
+G0 X83.6208 Y72.8935 Z5
+G1 X83.6208 Y72.8935 Z-7 F800
+G1 X86.9796 Y72.8935 F2400
+G2 X86.9796 Y72.8935 Z-1 I-3.3589 J0 P3
+G1 X83.6208 Y72.8935
+G0 Z5
+M2
+"""
+
+
+@pytest.mark.parametrize(("turns", "pitch", "expected"), [(3, 2.0, "sqrt"), (1, 1.0, 0.5)])
+def test_linuxcnc_helix_tangential_share(tmp_path, turns, pitch, expected):
+    """LinuxCNC's share of a helix's acceleration for speed changes along it
+    (tcUpdateCircleAccRatio, pmCircleActualMaxVel), on the preset's mill (2000 mm/s^2,
+    250 mm/s per axis). Canon: v_pl = sqrt(sqrt(3)/2 2000 3.3589) = 76.28 mm/s; S = 3.3589 2 pi
+    turns, L = hypot(S, rise); v = L / (S / 76.28) (the end point's straight-line time, the
+    rise at 250 mm/s, is shorter); a = L / (S / 2000). Both junctions parabolic: a_o = a / 2.
+    LinuxCNC's helix radius over the whole rise, R_e = rise^2 / 3.3589 + 3.3589:
+    - 3 turns of pitch 2 (drawn9's thread milling): rise 6, R_e = 14.077, a_n = v^2 / R_e =
+      417 < a_o / 2 (502): share sqrt(1 - (a_n / a_o)^2) = 0.910 (the trace: 913 mm/s^2 of the
+      1000 the halved acceleration leaves);
+    - one turn of pitch 1: R_e = 3.6566, a_n = 1595 > a_o / 2: 0.5.
+    The profile's helix acceleration is the lowest axis's over its share times the preset's
+    arc factor 0.5, the parabolic 0.5, and the share over 0.5."""
+    from core import Ncperf, load_preset
+    from core.engine.effects import setup_for
+
+    text = THREAD_3X2.replace("Z-1 I", f"Z{-7 + turns * pitch:g} I").replace("P3", f"P{turns}")
+    prog = tmp_path / "thread.ngc"
+    prog.write_text(text)
+    ncp = Ncperf()
+    tp = ncp.extract(str(prog))
+    m = load_preset("linuxcnc-sim")
+    r, rise = 3.3589, turns * pitch
+    s_len = r * 2 * math.pi * turns
+    length = math.hypot(s_len, rise)
+    v = length / (s_len / math.sqrt(math.sqrt(3) / 2 * 2000.0 * r))
+    a_o = length / (s_len / 2000.0) / 2
+    a_n = v * v / (rise * rise / r + r)
+    share = math.sqrt(1 - (a_n / a_o) ** 2) if expected == "sqrt" else 0.5
+    if expected == "sqrt":
+        assert a_n < a_o / 2 and share == pytest.approx(0.909, abs=0.002)
+    else:
+        assert a_n > a_o / 2
+    k = int(np.flatnonzero(tp.is_arc)[0])
+    prof = ncp.predict(tp, setup_for(m, ncp.effects())).profile
+    # the helix's tangential acceleration: lowest axis over its shares, the preset's 0.5, the
+    # parabolic blends' 0.5, and LinuxCNC's share over 0.5
+    from plugins.feed_limit import lowest_axis
+
+    a_axes = lowest_axis(tp.axis_share, np.array([k]), np.asarray(m.max_acceleration))[0][0]
+    assert prof.a_up[k] == pytest.approx(a_axes * 0.5 * 0.5 * share / 0.5, rel=1e-3)

@@ -148,7 +148,8 @@ class Evaluation:
         The share of its tangential acceleration each move keeps, from the junctions at its
         two ends (``acceleration_share`` of a junction indicator; LinuxCNC halves both
         segments' acceleration at a parabolic blend and takes the kink ratio off at a
-        tangent kink); None: every move keeps all of it.
+        tangent kink), times an element indicator's ``acceleration_share`` (LinuxCNC's share
+        on each arc); None: every move keeps all of it.
     """
 
     toolpath: ToolPath
@@ -317,6 +318,8 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     if machine.block_time_on_blends:
         indicators = [*indicators, *_blend_block_time(tp, machine, indicators)]
     for ind in indicators:
+        if ind.at == "element" and "acceleration_share" in ind.values:
+            continue  # a share of the moves' acceleration, not a limit (below)
         if ind.name not in names:
             names.append(ind.name)
         nid = names.index(ind.name)
@@ -392,6 +395,12 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
                 k, sh = ind.index[lower], share[lower]
                 np.minimum.at(acc_share, k, sh)
                 np.minimum.at(acc_share, k + 1, sh)
+    for ind in indicators:
+        # a planner's own share of a move's tangential acceleration (LinuxCNC's on its arcs),
+        # on top of what its junctions take
+        if ind.at == "element" and "acceleration_share" in ind.values:
+            acc_share = np.ones(tp.n) if acc_share is None else acc_share
+            acc_share[ind.index] *= np.asarray(ind.values["acceleration_share"], dtype=np.float64)
     efeed = tp.feed.copy()
     eind = np.full(tp.n, -1, dtype=CODE)
     elim = np.full(tp.n, -1, dtype=CODE)
