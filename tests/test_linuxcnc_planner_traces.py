@@ -92,7 +92,8 @@ def test_a_line_into_a_helix_and_out_of_it(tmp_path):
     """LinuxCNC runs both helix corners as parabolic blends: the lines and the helix at half
     their acceleration. Without that model the lines were 13 % short and the program 2.7 %
     (the blind benchmark's thread milling, a program like this one). Recorded 4.295 s;
-    predicted 4.279 s (with blend arcs at the helix: 4.248 s, -1.1 %)."""
+    predicted 4.291 s with the blends' overlap (2026-11-27; 4.279 s with each blend crossed
+    at its blend speed, 4.248 s with blend arcs at the helix, -1.1 %)."""
     tr = record(tmp_path, "thread", THREAD)
     prof = predicted(tr["prog"])
     measured = float(tr["t"][-1] - tr["t"][0])
