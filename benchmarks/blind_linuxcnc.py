@@ -353,6 +353,31 @@ def record(case: Case, cache: Path) -> Path:
     return out
 
 
+#: LinuxCNC's motion types in a trace's ``mtype`` column: 1 is a rapid (traverse); feed
+#: moves (lines, arcs) are above it.
+TRAVERSE = 1
+
+
+def feed_time(trace: Path) -> float:
+    """Seconds a LinuxCNC trace spends in feed moves (samples of motion type above a rapid
+    while moving, times the sample period): the part of a run the diagnosis compares."""
+    d = np.genfromtxt(trace, delimiter=",", names=True, usecols=("t", "v", "mtype"))
+    dt = float(np.median(np.diff(d["t"])))
+    return float(np.count_nonzero((d["mtype"] > TRAVERSE) & (d["v"] > 0.0))) * dt
+
+
+def visibility(c: Case, cache: Path) -> float:
+    """How much a case's setting changes LinuxCNC's own motion, independent of ncperf: the
+    relative change of the feed time against the same program run on the unchanged machine
+    (recorded for it; NaN for a lag or filter put on a trace afterwards, whose feed time it
+    leaves as it is, and for the controls)."""
+    v = c.variant
+    if v.effect is None or v.post is not None:
+        return math.nan
+    base = record(Case(CONTROL, c.family, c.seed), cache)
+    return feed_time(record(c, cache)) / feed_time(base) - 1.0
+
+
 def diagnose_case(args: tuple[Case, str]) -> dict:
     """Diagnose one case on its own (run in a worker)."""
     case, cache = args
@@ -411,6 +436,12 @@ def main() -> int:
     ap.add_argument("--only", type=int, default=0, help="the first N cases (0: all)")
     ap.add_argument("--record-only", action="store_true")
     ap.add_argument("--dump", default=None, help="pickle every case's evidence here")
+    ap.add_argument(
+        "--visibility",
+        action="store_true",
+        help="also record every changed-setting case's program on the unchanged machine and "
+        "report how much the setting changes LinuxCNC's own feed time (about 20 s a case)",
+    )
     args = ap.parse_args()
     if shutil.which("linuxcnc") is None or not HARNESS.exists():
         print("needs LinuxCNC and ../shared/tools/linuxcnc", file=sys.stderr)
@@ -423,6 +454,11 @@ def main() -> int:
     for k, c in enumerate(todo):
         record(c, cache)
         print(f"recorded {k + 1}/{len(todo)} {c.name} {c.variant.key}", file=sys.stderr, flush=True)
+    shown: dict[str, float] = {}
+    if args.visibility:
+        for k, c in enumerate(todo):
+            shown[c.name] = visibility(c, cache)
+            print(f"unchanged run {k + 1}/{len(todo)} {c.name}", file=sys.stderr, flush=True)
     if args.record_only:
         return 0
     # the unchanged runs under the lag and filter cases (recorded for them): more controls
@@ -485,7 +521,41 @@ def main() -> int:
             f"cycle time of linuxcnc-sim on the {len(errs)} unchanged runs: max error "
             f"{max(errs):.1%}, mean {np.mean(errs):.1%}"
         )
+    if shown:
+        print_visibility(changed, shown)
     return 0
+
+
+#: Feed-time changes (of LinuxCNC's own motion, by the changed setting) the visibility
+#: summary counts below: a setting that moves the feed time by less changes little a trace
+#: can show -- what it changes may still show in the speed at a few places.
+SHOWN_BELOW = (0.002, 0.005)
+
+
+def print_visibility(changed: list[dict], shown: dict[str, float]) -> None:
+    """The changed settings by how much they change LinuxCNC's own feed time (``--visibility``):
+    per case, then the hit rate where the change is at least each of SHOWN_BELOW."""
+    print()
+    print("LinuxCNC's own feed time, changed setting against the unchanged machine:")
+    print()
+    print("| program | changed | feed time change | named first |")
+    print("|---|---|---|---|")
+    rows = [(r, shown.get(r["case"].name, math.nan)) for r in changed]
+    for r, x in rows:
+        c = r["case"]
+        what = "(lag/filter put on the trace)" if math.isnan(x) else f"{x:+.2%}"
+        print(f"| {c.name} | {c.variant.label} | {what} | {r['named']} |")
+    print()
+    for limit in SHOWN_BELOW:
+        small = [(r, x) for r, x in rows if abs(x) < limit]
+        rest = [r for r, x in rows if not abs(x) < limit]
+        hits = sum(r["named"] == r["case"].variant.effect for r in rest)
+        named = sum(r["named"] == r["case"].variant.effect for r, _ in small)
+        print(
+            f"feed time moved by less than {limit:.1%}: {len(small)} cases ({named} named); "
+            f"named first among the other {len(rest)} (lags and filters included): "
+            f"{hits}/{len(rest)} ({hits / max(len(rest), 1):.0%})"
+        )
 
 
 if __name__ == "__main__":
