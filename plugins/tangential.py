@@ -88,7 +88,12 @@ import numpy as np
 from numpy.typing import NDArray
 
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
-from core.engine.indicators import LCNC_KINK_RATIO, LCNC_MIN_SEGMENT_CYCLES, LCNC_TANGENTIAL_RATIO
+from core.engine.indicators import (
+    LCNC_KINK_RATIO,
+    LCNC_MIN_SEGMENT_CYCLES,
+    LCNC_TANGENTIAL_RATIO,
+    junction_shares,
+)
 from core.model import geometry as g
 from core.model.arrays import nan_to_num
 from plugins.feed_limit import lowest_axis
@@ -115,6 +120,11 @@ LCNC_ANGLE_EPSILON = 1e-6
 #: blendmath.c blendInit3FromArcArc: a blend between two arcs whose intersection half-angle
 #: is below this is not made (rad).
 LCNC_ARC_ARC_THETA_MIN = np.pi / 12.0
+
+
+def servo_period(machine: Machine) -> float:
+    """LinuxCNC's servo period (s): the machine's block time over TP_MIN_SEGMENT_CYCLES."""
+    return machine.interpolation_time / LCNC_MIN_SEGMENT_CYCLES
 
 
 def inserted_radius(
@@ -284,8 +294,7 @@ def linuxcnc_blends(
     acc = machine.max_acceleration
     a_plane, axis = plane_acceleration(t1, t2, acc)
     a_n = a_plane * machine.normal_acceleration_factor
-    t_int = machine.interpolation_time
-    servo = t_int / LCNC_MIN_SEGMENT_CYCLES
+    servo = servo_period(machine)
     phi, reach_p, reach_n = geometry
     cap_p, cap_n = caps
     half = phi / 2.0
@@ -375,8 +384,7 @@ def linuxcnc_choice(
         # a parabolic blend overlaps the segments: the one before brakes from its blend
         # speed to a stop while the one after starts from rest; it costs the time of a
         # corner crossed at u (what it saves beyond a corner at full speed is not modelled)
-        servo = t_int / LCNC_MIN_SEGMENT_CYCLES
-        u, _ = parabolic_time_speed(run[0], a0 * 0.5, a1 * 0.5, f1, servo)
+        u, _ = parabolic_time_speed(run[0], a0 * 0.5, a1 * 0.5, f1, servo_period(machine))
     speed = np.where(mode == 0, arc_feed, np.where(mode == 1, u, perf_tangent))
     share = np.where(mode == 1, 0.5, np.where(mode == 2, 1.0 - LCNC_KINK_RATIO, 1.0))
     return mode, speed, share
@@ -501,7 +509,7 @@ def linuxcnc_arc_ratio(tp: ToolPath, k: NDArray[np.int64], machine: Machine, sha
         a = length / np.fmax(s_len / a_p, (np.abs(d) / acc).max(axis=1))
         v = np.fmin(
             np.fmin(v, machine.max_path_feed),
-            tp.length[k] / (machine.interpolation_time / LCNC_MIN_SEGMENT_CYCLES),
+            tp.length[k] / servo_period(machine),
         )
         a_o = a * share
         r_e = rise * rise / r_min + r_min
@@ -525,8 +533,7 @@ def _linuxcnc_arc_shares(
         return []
     moves = np.ones(tp.n)
     if share is not None and j.size:
-        np.minimum.at(moves, j, share)
-        np.minimum.at(moves, j + 1, share)
+        junction_shares(moves, j, share)
     rel = linuxcnc_arc_ratio(tp, k, machine, moves[k]) / LCNC_TANGENTIAL_RATIO
     other = rel != 1.0
     if not other.any():
@@ -703,7 +710,7 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
     tangent = None
     phi = beta
     if machine.corner_blending == "linuxcnc":
-        servo = machine.interpolation_time / LCNC_MIN_SEGMENT_CYCLES
+        servo = servo_period(machine)
         caps, kink_caps = segment_caps(tp, j, machine, machine.interpolation_time, servo)
         phi, reach_p, reach_n, refused = arc_blend_geometry(tp, j, beta)
         radius, inserted, tangent, v_plane, axis, kink = linuxcnc_blends(

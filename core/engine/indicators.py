@@ -306,6 +306,14 @@ def _zeros(values: NDArray) -> bool:
 _ZERO = np.float64(0.0).tobytes()
 
 
+def junction_shares(out: NDArray, index: NDArray, share: NDArray) -> NDArray:
+    """The share of its acceleration each move keeps from the junctions ``index`` at its two
+    ends (``share`` each): the least, written into ``out`` (n,); returned."""
+    np.minimum.at(out, index, share)
+    np.minimum.at(out, index + 1, share)
+    return out
+
+
 def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator]) -> Evaluation:
     """Keep, per junction and per element, the lowest feed any indicator allows."""
     tp = toolpath
@@ -392,9 +400,7 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
             lower = share < 1.0
             if lower.any():
                 acc_share = np.ones(tp.n) if acc_share is None else acc_share
-                k, sh = ind.index[lower], share[lower]
-                np.minimum.at(acc_share, k, sh)
-                np.minimum.at(acc_share, k + 1, sh)
+                junction_shares(acc_share, ind.index[lower], share[lower])
     for ind in indicators:
         # a planner's own share of a move's tangential acceleration (LinuxCNC's on its arcs),
         # on top of what its junctions take
