@@ -440,7 +440,7 @@ def _blend_half_angle(
         ka = k[arc]
         nrm = tp.normal[ka]
         t = u[arc]
-        t -= np.sum(t * nrm, axis=1)[:, None] * nrm  # in the arc's plane
+        t -= g.dot(t, nrm)[:, None] * nrm  # in the arc's plane
         t = g.unit(t)
         if start:
             inward = -g.radial(tp.start[ka], tp.center[ka], nrm)
@@ -449,7 +449,7 @@ def _blend_half_angle(
                 lean = (0.5 * tp.feed[ka]) ** 2 / r
                 t = g.unit(t * a_next[arc][:, None] + inward / r[:, None] * lean[:, None])
         u[arc] = t
-    dot = np.clip(np.sum(u1 * u2, axis=1), -1.0, 1.0)
+    dot = np.clip(g.dot(u1, u2), -1.0, 1.0)
     return np.sqrt((1.0 - dot) / 2.0), np.sqrt((1.0 + dot) / 2.0)
 
 
