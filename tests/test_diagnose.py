@@ -765,3 +765,47 @@ def test_most_of_a_gap_removed_significantly_needs_a_quarter_of_the_floor():
     assert named(16.8, 8.0, 0.0039) is None
     assert named(16.8, 4.7, 0.02) is None
     assert named(4.5, 1.26, 0.0039) is None
+
+
+@pytest.mark.parametrize("factor,named", [(1.03, None), (1.12, "block_cycle_time")])
+def test_a_setting_fitted_at_the_machine_files_value_is_not_named(nc, factor, named):
+    """The zigzag's 50 blocks of 0.8 mm run at 0.8 / t_block: 66.7 mm/s at the machine's
+    t_int of 12 ms (F 100 mm/s). A trace made with a block time 3 % longer (12.36 ms,
+    64.7 mm/s) is fitted at about that value, which is within MOVED_SHARE (1 %) of the
+    parameter's log range 0.1-50 ms of the machine's own (|ln 1.03| = 0.030 < 0.062): the fit
+    moved nothing, and what it removes is how sensitive the model is right at the machine
+    file's value, not a setting that differs -- nothing is named, and the report says why.
+    12 % longer (13.4 ms, 59.5 mm/s; ln 1.12 = 0.113) is a block time that differs: named."""
+    tp = zigzag()
+    m = machine(jerk=(INF, INF, INF))
+    effects = nc.effects()
+    base = Setup(machine=m)
+    eff = effects["block_cycle_time"]
+    truth = eff.apply(base, {"t_block": factor * m.interpolation_time})
+    tr = synthetic_trace(nc, tp, truth)
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", effects)
+    assert d.best_effect == named
+    top = d.effects[0]
+    assert top.name == "block_cycle_time"
+    assert top.params["t_block"] == pytest.approx(factor * 0.012, rel=0.01)
+    if named is None:
+        assert top.moved == 0 and top.held_out_gap_after < 0.5 * top.held_out_gap_before
+        assert "machine file's values" in d.reason
+    else:
+        assert top.moved == 1
+
+
+def test_an_idle_effect_is_not_named_but_one_that_moved_still_is():
+    """decide() with ``idle`` (effects whose fit left their parameters at the machine's
+    values, :func:`core.diagnosis.diagnose._changes_nothing` true at the start): a block
+    time at the preset's value removing 43 % (18.7 -> 10.7 mm/min, p = 0.00025, floor 10)
+    is not named; beside a tolerance fitted elsewhere removing 30 % it is that one."""
+    from core.diagnosis.diagnose import EffectResult, decide
+
+    sq = np.array([1.0, 2.0, 3.0, 4.0])
+    block = EffectResult("block_cycle_time", {"t_block": 0.001}, 18.7, 10.7, 10.7, 0, 0.00025, sq)
+    tol = EffectResult("corner_tolerance", {"tolerance": 0.05}, 18.7, 13.0, 13.0, 1, 0.0001, sq)
+    assert decide([block], floor=10.0)[1] == "block_cycle_time"
+    _, best, reason = decide([block], floor=10.0, idle=frozenset({"block_cycle_time"}))
+    assert best is None and "machine file's values" in reason
+    assert decide([block, tol], 5.0, idle=frozenset({"block_cycle_time"}))[1] == "corner_tolerance"

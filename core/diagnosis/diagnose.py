@@ -19,7 +19,9 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    the noise floor (the machine file's, from ``ncperf calibrate``, else estimated from the
    trace, and never under MIN_FEED_SHARE of F) and by at least BEST_SHARE of the gap (or,
    where it removes most of the gap -- MOST_SHARE -- significantly, by MOST_FLOOR of the
-   floor: no patch for what the model leaves out does that). Among
+   floor: no patch for what the model leaves out does that); an effect whose fit left
+   every parameter at the machine file's value (a block time of 1.00 ms where the file
+   says 1.02) is not named, whatever it removes. Among
    the effects that clear it, those not significantly worse than the best, or leaving a gap
    within TIE_SHARE of its gap, are equally good: the rapids, which no fit sees, drop those
    they show wrong (a rapid gap over twice the least and the floor); then one the machine
@@ -80,7 +82,7 @@ from core.diagnosis.rules import (
     TIE_P,
     TIE_SHARE,
 )
-from core.engine.effects import Effect, Setup
+from core.engine.effects import MOVED_SHARE, Effect, Setup
 from core.engine.indicators import IndicatorSource
 from core.engine.predict import Prediction
 from core.model.tolerances import TOL
@@ -257,7 +259,14 @@ def diagnose_cases(
     stretched = frozenset(
         r.name for r in results if bounded(effects[r.name], r.params, base.machine)
     )
-    results, best, reason = decide(results, floor, folded, stretched)
+    idle = frozenset(
+        r.name
+        for r in results
+        if r.moved == 0
+        and r.held_out_gap_after < r.held_out_gap_before
+        and _changes_nothing(indicators_of, tps, base, effects[r.name], before, data)
+    )
+    results, best, reason = decide(results, floor, folded, stretched, idle)
 
     chosen: list[str] = []
     chosen_params: dict[str, dict[str, float]] = {}
@@ -415,6 +424,26 @@ def _moved(eff: Effect, params: Mapping[str, float], start: Mapping[str, float])
     return sum(p.differs(params.get(p.name, 0.0), start.get(p.name, 0.0)) for p in eff.params)
 
 
+def _changes_nothing(
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    base: Setup,
+    eff: Effect,
+    before: Sequence[Prediction],
+    data: Sequence[Data],
+) -> bool:
+    """Whether ``eff`` at the values its fit starts from predicts what ``base`` does: the
+    same gap, bit for bit, on all the data (a block time or tolerance at the machine's own,
+    scales of 1; not a switch such as path compression, which acts at its defaults too).
+    Such an effect whose fit moved no parameter (by MOVED_SHARE of its range) found only
+    how sensitive the model is right at the machine file's values: on unchanged free-form
+    chord paths (0.05 mm chords at F2000, LinuxCNC, development seeds) ``block_cycle_time``
+    at 1.00 ms against the preset's 1.02 removed 43 % of the held-out gap at p = 0.00025 --
+    which junctions LinuxCNC's kink test takes for corners turns on that 2 %."""
+    start = predict_all(indicators_of, tps, eff.apply(base, eff.start(base.machine)))
+    return gap(start, data, "all") == gap(before, data, "all")
+
+
 def noise_floor(base: Setup, data: Sequence[Data]) -> tuple[float, str]:
     """The least RMS gap reduction (mm/min) an effect must bring, and its source."""
     least = MIN_FEED_SHARE * feed_level(data)
@@ -434,15 +463,18 @@ def decide(
     floor: float,
     folded: frozenset[str] = frozenset(),
     stretched: frozenset[str] = frozenset(),
+    idle: frozenset[str] = frozenset(),
 ) -> tuple[list[EffectResult], str | None, str]:
     """Rank the effects and name the best one, or none (see the module docstring).
 
     ``folded``: effects the machine file already sets (calibrated): among equally good
     effects they come last; ``stretched``: effects whose fit ran to a bound of a parameter
     (a corner tolerance at its least, standing for a stop at every corner): among equally
-    good effects they come after the others. Returns the effects in rank order (the named or
-    leading one first, then by held-out gap), the named effect and the reason in one
-    sentence."""
+    good effects they come after the others; ``idle``: effects whose fit left every
+    parameter at the machine's own value (:func:`_changes_nothing`): never named, whatever
+    they remove -- a setting fitted at the machine file's value is not a setting that
+    differs from it. Returns the effects in rank order (the named or leading one first, then
+    by held-out gap), the named effect and the reason in one sentence."""
     ranked = sorted(results, key=lambda r: r.held_out_gap_after)
     if not ranked:
         return ranked, None, "no effects to try"
@@ -450,10 +482,22 @@ def decide(
     ok = [
         r
         for r in ranked
-        if clears(r.held_out_gap_before, r.held_out_gap_after, r.p, floor, BEST_SHARE)
+        if r.name not in idle
+        and clears(r.held_out_gap_before, r.held_out_gap_after, r.p, floor, BEST_SHARE)
     ]
     if not ok:
         lead = ranked[0]
+        if lead.name in idle:
+            return (
+                ranked,
+                None,
+                (
+                    f"none: the best fit, {lead.name}, removes {lead.removed:.0%} of the held-out "
+                    "gap with its parameters at the machine file's values (within "
+                    f"{MOVED_SHARE:.0%} of their ranges): what the model is sensitive to there, "
+                    "not a setting that differs"
+                ),
+            )
         why = []
         if lead.removed < BEST_SHARE:
             why.append(f"removes {lead.removed:.0%} of the held-out gap (< {BEST_SHARE:.0%})")
