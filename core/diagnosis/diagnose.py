@@ -487,7 +487,9 @@ def decide(
     ]
     if not ok:
         lead = ranked[0]
-        if lead.name in idle:
+        if lead.name in idle and clears(
+            lead.held_out_gap_before, lead.held_out_gap_after, lead.p, floor, BEST_SHARE
+        ):
             return (
                 ranked,
                 None,
