@@ -57,6 +57,7 @@ from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
 from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
+from core.model.jit import compiled
 from core.model.pieces import PIECE, pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
@@ -203,6 +204,10 @@ HALFWAY = 13
 #: diagnose benchmark (a jerk-limited machine) to the halvings -- half of them on ramps of
 #: ~1e-5 mm/s, whose place is rounding noise -- four 5 %, for more work than they save.
 NEWTON_STEPS = 3
+
+
+#: :meth:`Profile.speed_at`'s ramps for the compiled kernel where there are none.
+_NO_RAMPS = tuple(np.empty(0) for _ in range(6))
 
 
 def _place_terms(
@@ -552,6 +557,24 @@ class Profile:
             return self.speed_at(s.reshape(-1)).reshape(s.shape)
         tp = self.toolpath
         k = tp.move_at(s)
+        kernels = compiled()
+        if kernels is not None:  # the same operations element by element (core.model.jit)
+            return kernels.profile_speed(
+                np.ascontiguousarray(s),
+                k,
+                tp.start_s,
+                tp.length,
+                self.hold_start,
+                self.hold_end,
+                self.v_entry,
+                self.v_exit,
+                self.a_up,
+                self.a_down,
+                self.v_peak,
+                self.ramps or _NO_RAMPS,
+                self.ramps is not None,
+                (TOL.nil_speed, TOL.tiny, TOL.sure_compare, HALVINGS, HALFWAY, NEWTON_STEPS),
+            )
         d = np.clip(s - tp.start_s[k], 0.0, tp.length[k])
         h0, h1 = self.hold_start[k], self.hold_end[k]
         into = np.maximum(d - h0, 0.0)
@@ -1368,6 +1391,21 @@ class _Rounds:
             self.last_dn = None
         acc, jerk, between = self.acc, self.jerk, self.holds.between
         n = a.size
+        kernels = compiled()
+        if kernels is not None:  # the same operations move by move (core.model.jit)
+            step = np.empty(n, dtype=np.int8)
+            moved = np.empty(n, dtype=bool)
+            change, self.finite, at, want = kernels.dense_round(
+                rising, phase, through, v0, v1, peak, a, last, term, off, acc, jerk,
+                between, step, moved, CACHE_PIECE, TOL.nil_speed, self.finite,
+            )  # fmt: skip
+            self.behind[rising] = (at, want)
+            self.moved.append(moved)
+            if rising:
+                self.step_up = step
+            else:
+                self.step_dn = step
+            return float(change)
         dv = _chain_dv(rising, phase, through, v0, v1, peak)
         step = np.empty(n, dtype=np.int8)
         moved = np.empty(n, dtype=bool)
