@@ -556,12 +556,10 @@ class Profile:
         if s.ndim != 1:
             return self.speed_at(s.reshape(-1)).reshape(s.shape)
         tp = self.toolpath
-        k = tp.move_at(s)
         kernels = compiled()
         if kernels is not None:  # the same operations element by element (core.model.jit)
             return kernels.profile_speed(
                 np.ascontiguousarray(s),
-                k,
                 tp.start_s,
                 tp.length,
                 self.hold_start,
@@ -575,6 +573,7 @@ class Profile:
                 self.ramps is not None,
                 (TOL.nil_speed, TOL.tiny, TOL.sure_compare, HALVINGS, HALFWAY, NEWTON_STEPS),
             )
+        k = tp.move_at(s)
         d = np.clip(s - tp.start_s[k], 0.0, tp.length[k])
         h0, h1 = self.hold_start[k], self.hold_end[k]
         into = np.maximum(d - h0, 0.0)
@@ -796,6 +795,11 @@ def _passes_of(
     too."""
     n1 = b2.size
     w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
+    kernels = compiled() if finite and n1 else None
+    if kernels is not None:  # the same sums and minima move by move (core.model.jit)
+        out = np.empty(n1) if out is None else out
+        kernels.plain_passes(b2, up, dn, w, bwd, out)
+        return out
     least = np.fmin if finite else np.minimum
     w[0] = 0.0
     np.cumsum(up, out=w[1:])

@@ -209,9 +209,32 @@ def _ramp_speed(
 
 
 @kernel
+def move_at(x: float, start_s: np.ndarray, hint: int) -> int:
+    """core.model.toolpath.ToolPath.move_at of one arc length: the number of ``start_s``
+    (sorted) at or below ``x``, less one, clipped to the moves (NaN: the last, as numpy's
+    searchsorted puts NaN past every number); looked for from the move ``hint`` on where
+    ``x`` lies there or after it, else by halving."""
+    n = start_s.size
+    if x != x:
+        return n - 1
+    lo, hi = 0, n  # below lo every start is at or below x, from hi on above it
+    if 0 <= hint < n and start_s[hint] <= x:
+        bound = 1  # (galloping from the hint: most samples stay on or near its move)
+        while hint + bound < n and start_s[hint + bound] <= x:
+            bound *= 2
+        lo, hi = hint + bound // 2 + 1, min(hint + bound, n)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if start_s[mid] <= x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return min(max(lo - 1, 0), n - 1)
+
+
+@kernel
 def profile_speed(
     s: np.ndarray,
-    k: np.ndarray,
     start_s: np.ndarray,
     length: np.ndarray,
     hold_start: np.ndarray,
@@ -225,18 +248,19 @@ def profile_speed(
     with_ramps: bool,
     consts: tuple[float, float, float, int, int, int],
 ) -> np.ndarray:
-    """core.engine.profile.Profile.speed_at at arc lengths ``s`` on moves ``k``
-    (ToolPath.move_at): ``ramps`` the profile's (lo_u, dv_u, lo_d, dv_d, acc, jerk) where
+    """core.engine.profile.Profile.speed_at at arc lengths ``s`` (with ToolPath.move_at):
+    ``ramps`` the profile's (lo_u, dv_u, lo_d, dv_d, acc, jerk) where
     ``with_ramps``; ``consts`` (TOL.nil_speed, TOL.tiny, TOL.sure_compare, HALVINGS,
     HALFWAY, NEWTON_STEPS)."""
     lo_u, dv_u, lo_d, dv_d, acc, jerk = ramps
     nil_speed = consts[0]
     out = np.empty(s.size)
+    m = 0  # the last sample's move: the next is searched from there
     # the last move's ramps (samples come along the path: most share their move's)
     at_up = at_dn = -1
     ramp_up = ramp_dn = _ramp(1.0, 1.0, 1.0, 0.0, 1.0, 1.0, consts)
     for i in range(s.size):
-        m = k[i]
+        m = move_at(s[i], start_s, m)
         length_m = length[m]
         d = clip(s[i] - start_s[m], 0.0, length_m)
         into = vmax(d - hold_start[m], 0.0)
@@ -555,12 +579,12 @@ def dense_round(
             od = a[k]
             # effective_acceleration(dv, acc, jerk, only=phase)
             d, ak, jk = dv[k], acc[k], jerk[k]
-            t_full = d / ak + ak / jk
-            t_short = math.sqrt(d / jk) * 2.0
-            t = t_full if d >= ak * ak / jk else t_short
-            new = d / t
-            if not (math.isfinite(jk) and d > nil_speed and phase[k]):
-                new = ak
+            new = ak  # (the quotients only where they are kept)
+            if math.isfinite(jk) and d > nil_speed and phase[k]:
+                t_full = d / ak + ak / jk
+                t_short = math.sqrt(d / jk) * 2.0
+                t = t_full if d >= ak * ak / jk else t_short
+                new = d / t
             # the damping
             ls = last[k]
             o = new
@@ -589,3 +613,34 @@ def dense_round(
             if not (math.isfinite(tm) and not tm < 0.0):
                 finite = False
     return change, finite, behind[:n_behind].copy(), wanted[:n_behind].copy()
+
+
+@kernel
+def plain_passes(
+    b2: np.ndarray, up: np.ndarray, dn: np.ndarray, w: np.ndarray, bwd: np.ndarray, out: np.ndarray
+) -> None:
+    """core.engine.profile._passes_of with ``finite`` (no NaN, no -0.0, terms >= 0: fmin is
+    a plain comparison and the clamp at 0 is left out) into ``out``: the sums sequential
+    as np.cumsum's (the first term itself, then one term after the other), the minima
+    running as np.fmin.accumulate's (a NaN only past them, where a sum overflowed); ``w``
+    and ``bwd`` work arrays of b2's size."""
+    n1 = b2.size
+    w[0] = 0.0
+    for i in range(1, n1):
+        w[i] = up[0] if i == 1 else w[i - 1] + up[i - 1]
+    least = b2[0] - w[0]
+    for i in range(n1):
+        x = b2[i] - w[i]
+        if x < least:
+            least = x
+        out[i] = least + w[i]
+    for i in range(1, n1):
+        w[i] = dn[0] if i == 1 else w[i - 1] + dn[i - 1]
+    least = b2[n1 - 1] + w[n1 - 1]
+    for i in range(n1 - 1, -1, -1):
+        x = b2[i] + w[i]
+        if x < least:
+            least = x
+        bwd[i] = least - w[i]
+    for i in range(n1):  # (an overflowed sum gives NaN there: np.minimum's rules)
+        out[i] = math.sqrt(vmin(vmin(out[i], bwd[i]), b2[i]))
