@@ -1163,6 +1163,13 @@ class _Rounds:
         if 2 * at.size > n:
             self.marks = self._all_marks(v)
             return None
+        kernels = compiled()
+        if kernels is not None:  # the same operations move by move (core.model.jit)
+            kernels.marks(
+                at, False, v, self.a_up, self.a_dn, self.holds.between, self.cap,
+                (TOL.rel_equal, TOL.nil_distance), self.marks,
+            )  # fmt: skip
+            return at
         for s in pieces(at.size, CACHE_PIECE):  # (elementwise: bounded temporaries)
             k = at[s]
             pk, r, f, t_up, t_dn = _marks_of(
@@ -1195,6 +1202,14 @@ class _Rounds:
         # start (falling) and so links its ramp to the next or the previous move
         through_up = np.zeros(n + 1, dtype=bool)
         through_dn = np.zeros(n + 1, dtype=bool)
+        kernels = compiled()
+        if kernels is not None:  # the same operations move by move (core.model.jit)
+            out = (peak, rise, fall, through_up, through_dn)
+            kernels.marks(
+                np.zeros(0, dtype=np.intp), True, v, a_up, a_dn, between, self.cap,
+                (TOL.rel_equal, TOL.nil_distance), out,
+            )  # fmt: skip
+            return out
         size = min(n, CACHE_PIECE)
         sq, tmp, lim = np.empty(size + 1), np.empty(size), np.empty(size)
         one = np.empty(size, dtype=bool)

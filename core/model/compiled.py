@@ -596,9 +596,10 @@ def dense_round(
                     n_behind += 1
             out[k] = o
             step[k] = (1 if o > od else 0) - (1 if o < od else 0)
-            rel = abs(o / od - 1.0)
-            if rel > change:  # (NaN skipped, as nanmax)
-                change = rel
+            if o != od:  # (where o == od, o / od - 1 is 0 or NaN: no change either way)
+                rel = abs(o / od - 1.0)
+                if rel > change:  # (NaN skipped, as nanmax)
+                    change = rel
             mv = o != od
             moved[k] = mv
             any_moved = any_moved or mv
@@ -644,3 +645,45 @@ def plain_passes(
         bwd[i] = least - w[i]
     for i in range(n1):  # (an overflowed sum gives NaN there: np.minimum's rules)
         out[i] = math.sqrt(vmin(vmin(out[i], bwd[i]), b2[i]))
+
+
+@kernel
+def marks(
+    at: np.ndarray,
+    every: bool,
+    v: np.ndarray,
+    a_up: np.ndarray,
+    a_dn: np.ndarray,
+    between: np.ndarray,
+    cap: np.ndarray,
+    tols: tuple[float, float],
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """core.engine.profile._Rounds._all_marks (``every``: all moves) or _marks_of of the
+    moves ``at``, move by move into ``out`` = (peak, rise, fall, through_up, through_dn)
+    (through_*[k + 1] of move k); ``tols`` (TOL.rel_equal, TOL.nil_distance)."""
+    peak, rise, fall, through_up, through_dn = out
+    rel_equal, nil_distance = tols
+    count = a_up.size if every else at.size
+    for i in range(count):
+        k = i if every else at[i]
+        v0, v1, au, ad, lk = v[k], v[k + 1], a_up[k], a_dn[k], between[k]
+        q0 = v0 * v0
+        q1 = v1 * v1
+        pk = q0 / au + lk * 2.0 + q1 / ad
+        pk = pk / (1.0 / au + 1.0 / ad)
+        pk = vmax(vmin(cap[k], math.sqrt(vmax(pk, 0.0))), vmax(v0, v1))
+        t = vmax(pk, 1.0) * rel_equal
+        r = pk > v0 + t
+        f = pk > v1 + t
+        peak[k] = pk
+        rise[k] = r
+        fall[k] = f
+        flat = False
+        if r != f:  # the cruise length of a move that only accelerates or only brakes
+            pk2 = pk * pk
+            d_cr = lk - (pk2 - q0) / (2.0 * au)
+            d_cr = d_cr - (pk2 - q1) / (2.0 * ad)
+            flat = vmax(d_cr, 0.0) <= nil_distance
+        through_up[k + 1] = r and flat
+        through_dn[k + 1] = f and flat
