@@ -87,16 +87,15 @@ def _place(
     x = x - vb2
     x = x / two_a
     pp = p * p
-    big_g = (pp - rr) * 0.5
-    t = half_r * (p - r)
-    big_g = big_g - t
-    big_g = c * big_g
-    big_g = inner0 + big_g
+    # G: the ends of the ramp where p is in them, else the middle (numpy computes the
+    # middle everywhere and writes the ends over it: the same values)
     if p < r:
         big_g = c * math.pow(p, 3.0) / six_rs
     elif p > one_r:
         q = 1.0 - p
         big_g = 0.5 - q + c * math.pow(q, 3.0) / six_rs
+    else:
+        big_g = inner0 + c * ((pp - rr) * 0.5 - half_r * (p - r))
     big_g = big_g - pp * 0.5
     big_g = span * big_g
     x = x + big_g
