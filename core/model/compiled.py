@@ -625,25 +625,28 @@ def plain_passes(
     running as np.fmin.accumulate's (a NaN only past them, where a sum overflowed); ``w``
     and ``bwd`` work arrays of b2's size."""
     n1 = b2.size
-    w[0] = 0.0
-    for i in range(1, n1):
-        w[i] = up[0] if i == 1 else w[i - 1] + up[i - 1]
-    least = b2[0] - w[0]
+    # forward: both sums (the braking one into bwd) and the forward pass, three chains
+    # that overlap; backward: the backward pass, then the lower of the two and the cap
+    wu = wd = 0.0
+    least = b2[0]
     for i in range(n1):
-        x = b2[i] - w[i]
+        if i:
+            wu = up[0] if i == 1 else wu + up[i - 1]
+            wd = dn[0] if i == 1 else wd + dn[i - 1]
+        w[i] = wu
+        bwd[i] = wd
+        x = b2[i] - wu
         if x < least:
             least = x
-        out[i] = least + w[i]
-    for i in range(1, n1):
-        w[i] = dn[0] if i == 1 else w[i - 1] + dn[i - 1]
-    least = b2[n1 - 1] + w[n1 - 1]
+        out[i] = least + wu
+    least = b2[n1 - 1] + bwd[n1 - 1]
     for i in range(n1 - 1, -1, -1):
-        x = b2[i] + w[i]
+        wd = bwd[i]
+        x = b2[i] + wd
         if x < least:
             least = x
-        bwd[i] = least - w[i]
-    for i in range(n1):  # (an overflowed sum gives NaN there: np.minimum's rules)
-        out[i] = math.sqrt(vmin(vmin(out[i], bwd[i]), b2[i]))
+        # (an overflowed sum gives NaN here: np.minimum's rules)
+        out[i] = math.sqrt(vmin(vmin(out[i], least - wd), b2[i]))
 
 
 @kernel
