@@ -11,7 +11,7 @@ import pytest
 
 from core import Ncperf, load_preset
 from core.engine.profile import Profile, build_profile
-from core.model.jit import NO_JIT_ENV, compiled
+from core.model.jit import NO_JIT_ENV, allow, compiled
 from core.model.sampling import PROJECTION_STEP
 from tests.conftest import ROOT
 from tests.test_projection import _cases
@@ -19,6 +19,11 @@ from tests.test_projection import _cases
 pytest.importorskip("numba", reason="numba (the extra 'fast') is not installed")
 
 PROGRAM = ROOT / "examples" / "zlevel_cavity_chords.ngc"
+
+
+@pytest.fixture(autouse=True)
+def _allowed() -> None:
+    allow()  # (as the diagnosis does)
 
 
 def _bits(x: np.ndarray) -> np.ndarray:
@@ -96,3 +101,20 @@ def test_no_jit_switch(monkeypatch):
     for value, off in (("1", True), ("yes", True), ("0", False), ("", False)):
         monkeypatch.setenv(NO_JIT_ENV, value)
         assert (compiled() is None) == off
+
+
+def test_analyze_does_not_load_numba():
+    """`ncperf analyze` does not pay numba's start-up (core.model.jit): the kernels are the
+    diagnosis's, allowed by it."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from core.cli import main\n"
+        "try:\n    main(['analyze', sys.argv[1]])\nexcept SystemExit:\n    pass\n"
+        "assert 'numba' not in sys.modules, 'numba imported'\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(PROGRAM)], capture_output=True, text=True, cwd=ROOT
+    )
+    assert out.returncode == 0, out.stderr

@@ -1,14 +1,23 @@
 """Whether the compiled kernels (:mod:`core.model.compiled`, numba) stand in for numpy.
 
-numba is optional (``pip install ncperf[fast]``): where it is installed and the
-environment variable ``NCPERF_NO_JIT`` is not set to a non-empty value other than ``0``,
-the diagnosis's hottest loops (the profile's speed inside jerk-limited ramps, the
-projection of points onto the path) run compiled, element by element, with the same
-floating-point operations in the same order as numpy's array-wide code: the same bits
-(``tests/test_jit.py``). Elsewhere numpy alone, as before.
+numba is optional (``pip install "ncperf[fast]"``). The kernels run the diagnosis's
+hottest loops (the profile's rounds and passes, the speed inside jerk-limited ramps, the
+projection of points onto the path) element by element with the same floating-point
+operations in the same order as numpy's array-wide code: the same bits
+(``tests/test_jit.py``). They are used where all three hold:
 
-numba is imported on the first call of :func:`compiled` (a few tenths of a second), not
-with ncperf: commands that never reach these loops do not pay for it.
+* the diagnosis asked for them (:func:`allow`: :func:`core.diagnosis.align.align`,
+  :func:`core.diagnosis.diagnose.diagnose_cases` and
+  :func:`core.diagnosis.calibrate.calibrate` do): importing numba and loading its cached
+  kernels costs about 0.4 s, which the diagnosis's minutes of fits repay and a single
+  ``ncperf analyze`` would not;
+* numba is installed;
+* the environment variable ``NCPERF_NO_JIT`` is not set to a non-empty value other
+  than ``0``.
+
+Elsewhere numpy's code runs, as before. numba compiles the kernels on their first use after
+an install or a change (several seconds, once) and keeps them in its cache beside
+``compiled.py`` (or, where that folder is not writable, in the user's cache folder).
 """
 
 from __future__ import annotations
@@ -19,6 +28,14 @@ from types import ModuleType
 
 #: Set (to anything but "" or "0") to keep numpy's code where numba is installed.
 NO_JIT_ENV = "NCPERF_NO_JIT"
+
+_allowed = [False]  # (a list: set by allow() without a global statement)
+
+
+def allow() -> None:
+    """Let the kernels stand in for numpy from now on in this process (and in the worker
+    processes it forks): the diagnosis calls this."""
+    _allowed[0] = True
 
 
 def disabled() -> bool:
@@ -36,6 +53,8 @@ def _load() -> ModuleType | None:
 
 
 def compiled() -> ModuleType | None:
-    """The compiled kernels' module, or None: numba absent or ``NCPERF_NO_JIT`` set (read
-    at every call, so a test may switch)."""
-    return None if disabled() else _load()
+    """The compiled kernels' module, or None: not :func:`allow`-ed, numba absent, or
+    ``NCPERF_NO_JIT`` set (read at every call, so a test may switch)."""
+    if not _allowed[0] or disabled():
+        return None
+    return _load()
