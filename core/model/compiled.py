@@ -1,13 +1,13 @@
 """Compiled (numba) kernels of the diagnosis's hottest loops, element by element.
 
-Imported only through :func:`core.model.jit.compiled` (numba installed, ``NCPERF_NO_JIT``
-not set). Every kernel does, for each element, the same floating-point operations in the
-same order as the numpy code it stands in for (named in its docstring), so that both give
-the same bits (``tests/test_jit.py``): no fastmath (no reordering, no fused multiply-adds),
-x**2 written x * x as numpy's square, x**3 as ``math.pow`` (the C library's pow, as numpy's
-power), numpy's NaN rules for minimum, maximum, clip and nan_to_num (:func:`vmin`,
-:func:`vmax`, :func:`clip`, :func:`finite`). ``error_model="numpy"``: a division by zero
-gives inf or NaN as in numpy, not an exception.
+Imported only through :func:`core.model.jit.compiled` (allowed by the diagnosis, numba
+installed, ``NCPERF_NO_JIT`` not set). Every kernel does, for each element, the same
+floating-point operations in the same order as the numpy code it stands in for (named in
+its docstring), so that both give the same bits (``tests/test_jit.py``): no fastmath (no
+reordering, no fused multiply-adds), x**2 written x * x as numpy's square, x**3 as
+``math.pow`` (the C library's pow, as numpy's power), numpy's NaN rules for minimum,
+maximum, clip and nan_to_num (:func:`vmin`, :func:`vmax`, :func:`clip`, :func:`finite`).
+``error_model="numpy"``: a division by zero gives inf or NaN as in numpy, not an exception.
 """
 
 from __future__ import annotations
@@ -27,7 +27,9 @@ FLOAT_MAX = float(np.finfo(np.float64).max)
 
 @kernel
 def vmax(a: float, b: float) -> float:
-    """np.maximum of two floats: NaN if either is; the second of two equal values."""
+    """np.maximum of two floats: NaN if either is; the second of two equal values (numpy's
+    vector loops take the CPU's max, which returns its second operand for +0.0 and -0.0:
+    the sign of a zero as there)."""
     if a != a:
         return a
     if b != b:
