@@ -25,6 +25,7 @@ from numpy.typing import NDArray
 
 from core.model import geometry as g
 from core.model.errors import InputError
+from core.model.jit import allow
 from core.model.sampling import PROJECTION_STEP, PathSamples, isotonic
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
@@ -335,6 +336,7 @@ def align(tp: ToolPath, trace: Trace, *, fit_offset: bool = True, jobs: int = 1)
     """Place every sample of ``trace`` on the path of ``tp`` (see the module docstring);
     ``jobs``: worker processes for the projection of the samples of each program line (the
     same alignment, sooner)."""
+    allow()  # the compiled kernels where numba is installed (core.model.jit)
     start_s, end_s = tp.start_s, tp.end_s
     total_feed = float(tp.length[tp.is_feed].sum()) or float(tp.length.sum())
     tol = np.nan_to_num(tp.tolerance, nan=0.0)

@@ -53,6 +53,7 @@ from core.engine.effects import Effect, Setup
 from core.engine.indicators import IndicatorSource
 from core.engine.predict import Prediction
 from core.model.errors import UsageError
+from core.model.jit import allow
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.model.workers import forked_map, workers_for
@@ -257,6 +258,7 @@ def calibrate(
     fits of each round of the forward selection and the scans of the parameters' ranges
     (the same calibration whatever their number, :mod:`core.model.workers`); ``progress``,
     if given, is told those fits."""
+    allow()  # the compiled kernels where numba is installed (core.model.jit)
     tps = [tp for tp, _, _ in cases]
     obj, reason = choose_objective(objective, [al for _, als, _ in cases for al in als])
     data: list[Any]

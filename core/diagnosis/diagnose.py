@@ -85,6 +85,7 @@ from core.diagnosis.rules import (
 from core.engine.effects import MOVED_SHARE, Effect, Setup
 from core.engine.indicators import IndicatorSource
 from core.engine.predict import Prediction
+from core.model.jit import allow
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.view.annotations import Annotations
@@ -223,6 +224,7 @@ def diagnose_cases(
     ``progress``, if given, is told what is being done (one short line per step); ``jobs``:
     the worker processes the independent fits may run on (:mod:`core.diagnosis.parallel`;
     the diagnosis is the same whatever their number)."""
+    allow()  # the compiled kernels where numba is installed (core.model.jit)
     tps = [tp for tp, _, _ in cases]
     data = [
         resample(tp, al, lab, case=k)

@@ -57,6 +57,7 @@ from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
 from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
+from core.model.jit import compiled
 from core.model.pieces import PIECE, pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
@@ -203,6 +204,10 @@ HALFWAY = 13
 #: diagnose benchmark (a jerk-limited machine) to the halvings -- half of them on ramps of
 #: ~1e-5 mm/s, whose place is rounding noise -- four 5 %, for more work than they save.
 NEWTON_STEPS = 3
+
+
+#: :meth:`Profile.speed_at`'s ramps for the compiled kernel where there are none.
+_NO_RAMPS = tuple(np.empty(0) for _ in range(6))
 
 
 def _place_terms(
@@ -551,6 +556,23 @@ class Profile:
         if s.ndim != 1:
             return self.speed_at(s.reshape(-1)).reshape(s.shape)
         tp = self.toolpath
+        kernels = compiled()
+        if kernels is not None:  # the same operations element by element (core.model.jit)
+            return kernels.profile_speed(
+                np.ascontiguousarray(s),
+                tp.start_s,
+                tp.length,
+                self.hold_start,
+                self.hold_end,
+                self.v_entry,
+                self.v_exit,
+                self.a_up,
+                self.a_down,
+                self.v_peak,
+                self.ramps or _NO_RAMPS,
+                self.ramps is not None,
+                (TOL.nil_speed, TOL.tiny, TOL.sure_compare, HALVINGS, HALFWAY, NEWTON_STEPS),
+            )
         k = tp.move_at(s)
         d = np.clip(s - tp.start_s[k], 0.0, tp.length[k])
         h0, h1 = self.hold_start[k], self.hold_end[k]
@@ -773,6 +795,11 @@ def _passes_of(
     too."""
     n1 = b2.size
     w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
+    kernels = compiled() if finite and n1 else None
+    if kernels is not None:  # the same sums and minima move by move (core.model.jit)
+        out = np.empty(n1) if out is None else out
+        kernels.plain_passes(b2, up, dn, w, bwd, out)
+        return out
     least = np.fmin if finite else np.minimum
     w[0] = 0.0
     np.cumsum(up, out=w[1:])
@@ -1136,6 +1163,13 @@ class _Rounds:
         if 2 * at.size > n:
             self.marks = self._all_marks(v)
             return None
+        kernels = compiled()
+        if kernels is not None:  # the same operations move by move (core.model.jit)
+            kernels.marks(
+                at, False, v, self.a_up, self.a_dn, self.holds.between, self.cap,
+                (TOL.rel_equal, TOL.nil_distance), self.marks,
+            )  # fmt: skip
+            return at
         for s in pieces(at.size, CACHE_PIECE):  # (elementwise: bounded temporaries)
             k = at[s]
             pk, r, f, t_up, t_dn = _marks_of(
@@ -1168,6 +1202,14 @@ class _Rounds:
         # start (falling) and so links its ramp to the next or the previous move
         through_up = np.zeros(n + 1, dtype=bool)
         through_dn = np.zeros(n + 1, dtype=bool)
+        kernels = compiled()
+        if kernels is not None:  # the same operations move by move (core.model.jit)
+            out = (peak, rise, fall, through_up, through_dn)
+            kernels.marks(
+                np.zeros(0, dtype=np.intp), True, v, a_up, a_dn, between, self.cap,
+                (TOL.rel_equal, TOL.nil_distance), out,
+            )  # fmt: skip
+            return out
         size = min(n, CACHE_PIECE)
         sq, tmp, lim = np.empty(size + 1), np.empty(size), np.empty(size)
         one = np.empty(size, dtype=bool)
@@ -1368,6 +1410,21 @@ class _Rounds:
             self.last_dn = None
         acc, jerk, between = self.acc, self.jerk, self.holds.between
         n = a.size
+        kernels = compiled()
+        if kernels is not None:  # the same operations move by move (core.model.jit)
+            step = np.empty(n, dtype=np.int8)
+            moved = np.empty(n, dtype=bool)
+            change, self.finite, at, want = kernels.dense_round(
+                rising, phase, through, v0, v1, peak, a, last, term, off, acc, jerk,
+                between, step, moved, CACHE_PIECE, TOL.nil_speed, self.finite,
+            )  # fmt: skip
+            self.behind[rising] = (at, want)
+            self.moved.append(moved)
+            if rising:
+                self.step_up = step
+            else:
+                self.step_dn = step
+            return float(change)
         dv = _chain_dv(rising, phase, through, v0, v1, peak)
         step = np.empty(n, dtype=np.int8)
         moved = np.empty(n, dtype=bool)

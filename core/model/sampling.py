@@ -14,6 +14,7 @@ from functools import cached_property
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from core.model.jit import compiled
 from core.model.tolerances import TOL
 
 #: Path sampling step (mm) for projecting points on the path: measured samples
@@ -115,6 +116,23 @@ class PathSamples:
         half = int(half_width / self.step)
         if not (np.isfinite(q).all() and np.isfinite(s_guess).all()):
             return self._project_near_gathered(q, s_guess, half)
+        kernels = compiled()
+        if kernels is not None:  # the same search point by point (core.model.jit)
+            px, py, pz = self._columns
+            return kernels.project_near(
+                np.ascontiguousarray(q),
+                np.ascontiguousarray(s_guess),
+                np.searchsorted(s_p, s_guess),
+                px,
+                py,
+                pz,
+                np.ascontiguousarray(s_p),
+                self._reach,
+                self._clearance(half + NEAR_FIRST) if half >= NEAR_FIRST else np.empty(0),
+                half,
+                (NEAR_BLOCK, NEAR_PROBE, NEAR_FIRST, CLEAR_FROM, COARSE),
+                (NEAR_WORTH, NEAR_SLACK, TOL.pass_tie),
+            )
         # The nearest few points first, where that pays and tells (:meth:`_near_first`);
         # elsewhere the window (:meth:`_window`): every COARSE-th offset of it for all
         # points, then the offsets between two of them only for the points they might be

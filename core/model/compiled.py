@@ -1,0 +1,693 @@
+"""Compiled (numba) kernels of the diagnosis's hottest loops, element by element.
+
+Imported only through :func:`core.model.jit.compiled` (allowed by the diagnosis, numba
+installed, ``NCPERF_NO_JIT`` not set). Every kernel does, for each element, the same
+floating-point operations in the same order as the numpy code it stands in for (named in
+its docstring), so that both give the same bits (``tests/test_jit.py``): no fastmath (no
+reordering, no fused multiply-adds), x**2 written x * x as numpy's square, x**3 as
+``math.pow`` (the C library's pow, as numpy's power), numpy's NaN rules for minimum,
+maximum, clip and nan_to_num (:func:`vmin`, :func:`vmax`, :func:`clip`, :func:`finite`).
+``error_model="numpy"``: a division by zero gives inf or NaN as in numpy, not an exception.
+"""
+
+from __future__ import annotations
+
+import math
+
+import numpy as np
+from numba import njit
+
+#: The kernels are compiled once and kept on disk (numba's cache: beside this file where
+#: it can write, else the user's cache folder), so a later process loads them instead.
+kernel = njit(cache=True, error_model="numpy", nogil=True)
+
+#: np.nan_to_num's value for +inf.
+FLOAT_MAX = float(np.finfo(np.float64).max)
+
+
+@kernel
+def vmax(a: float, b: float) -> float:
+    """np.maximum of two floats: NaN if either is; the second of two equal values (numpy's
+    vector loops take the CPU's max, which returns its second operand for +0.0 and -0.0:
+    the sign of a zero as there)."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a > b else b
+
+
+@kernel
+def vmin(a: float, b: float) -> float:
+    """np.minimum of two floats: NaN if either is; the second of two equal values."""
+    if a != a:
+        return a
+    if b != b:
+        return b
+    return a if a < b else b
+
+
+@kernel
+def clip(x: float, lo: float, hi: float) -> float:
+    """np.clip of a float (NaN stays NaN)."""
+    return vmin(vmax(x, lo), hi)
+
+
+@kernel
+def finite(x: float) -> float:
+    """np.nan_to_num of a float: NaN 0, +-inf the largest float of its sign."""
+    if x != x:
+        return 0.0
+    if x == np.inf:
+        return FLOAT_MAX
+    if x == -np.inf:
+        return -FLOAT_MAX
+    return x
+
+
+@kernel
+def _place(
+    p: float,
+    rising: bool,
+    lo: float,
+    dv: float,
+    two_a: float,
+    vb2: float,
+    span: float,
+    r: float,
+    c: float,
+    six_rs: float,
+    inner0: float,
+    rr: float,
+    half_r: float,
+    one_r: float,
+) -> float:
+    """core.engine.profile._place for one element."""
+    x = p * dv if rising else (1.0 - p) * dv
+    x = lo + x
+    x = x * x
+    x = x - vb2
+    x = x / two_a
+    pp = p * p
+    # G: the ends of the ramp where p is in them, else the middle (numpy computes the
+    # middle everywhere and writes the ends over it: the same values)
+    if p < r:
+        big_g = c * math.pow(p, 3.0) / six_rs
+    elif p > one_r:
+        q = 1.0 - p
+        big_g = 0.5 - q + c * math.pow(q, 3.0) / six_rs
+    else:
+        big_g = inner0 + c * ((pp - rr) * 0.5 - half_r * (p - r))
+    big_g = big_g - pp * 0.5
+    big_g = span * big_g
+    x = x + big_g
+    return -x if not rising else x
+
+
+@kernel
+def _g(p: float, r: float, c: float, rs: float) -> float:
+    """core.engine.profile.s_curve_g for one element."""
+    p = clip(p, 0.0, 1.0)
+    q = 1.0 - p
+    if p < r:
+        return c * p * p / (2.0 * rs)
+    if p > 1.0 - r:
+        return 1.0 - c * q * q / (2.0 * rs)
+    return c * (p - 0.5 * r)
+
+
+@kernel
+def _sure(
+    a_p: float, b_p: float, goal: float, rising: bool, margin: float, sane: bool, terms: tuple
+) -> bool:
+    """core.engine.profile._sure for one element (``margin`` and ``sane`` of its ramp)."""
+    if not sane:
+        return False
+    if not (a_p == 0.0 or _place(a_p, rising, *terms) < goal - margin):
+        return False
+    return b_p == 1.0 or _place(b_p, rising, *terms) >= goal + margin
+
+
+@kernel
+def _ramp(
+    lo: float,
+    dv: float,
+    a: float,
+    vb: float,
+    acc: float,
+    jerk: float,
+    consts: tuple[float, float, float, int, int, int],
+) -> tuple:
+    """What the place inside a ramp needs of the ramp alone (computed once per move and
+    direction): :func:`_place`'s terms, then rs, the rate dx/dp / speed, the margin of
+    :func:`_sure` and whether the ramp is sane there (s_curve_shape, _place_terms)."""
+    nil_speed, tiny, sure_compare = consts[0], consts[1], consts[2]
+    span = dv * dv / a
+    a_p = vmin(acc, math.sqrt(dv * jerk))
+    t_j = a_p / jerk
+    total = dv / a_p + t_j
+    r = t_j / total if (dv > nil_speed and math.isfinite(jerk) and total > 0) else 0.0
+    r = clip(finite(r), 0.0, 0.5)
+    c = 1.0 / (1.0 - r)
+    rs = vmax(r, tiny)
+    vb2 = vb * vb
+    two_a = 2.0 * a
+    e = lo + dv
+    margin = sure_compare * ((e * e + vb2) / two_a + abs(span))
+    sane = two_a > 0 and lo >= 0 and dv >= 0 and math.isfinite(margin)
+    terms = (lo, dv, two_a, vb2, span, r, c, 6.0 * rs, c * r * r / 6.0, r * r, 0.5 * r, 1.0 - r)
+    return terms, rs, dv / (0.5 * two_a), margin, sane
+
+
+@kernel
+def _ramp_speed(
+    target: float,
+    rising: bool,
+    ramp: tuple,
+    consts: tuple[float, float, float, int, int, int],
+) -> float:
+    """The speed inside a jerk-limited ramp of core.engine.profile.Profile.speed_at for one
+    element of a :func:`_ramp`: _bisect_ramp (_checked_guess, _sure, _halvings) and
+    s_curve_g."""
+    halvings, halfway, newton = consts[3], consts[4], consts[5]
+    terms, rs, rate, margin, sane = ramp
+    lo, dv, two_a, vb2 = terms[0], terms[1], terms[2], terms[3]
+    r, c = terms[5], terms[6]
+    goal = target if rising else -target
+    # _checked_guess
+    dist = goal if rising else -goal
+    u = (math.sqrt(vmax(vb2 + two_a * dist, 0.0)) - lo) / dv
+    p = clip(finite(u if rising else 1.0 - u), 0.0, 1.0)
+    for _ in range(newton):
+        g = _g(p, r, c, rs)
+        speed = lo + dv * (g if rising else 1.0 - g)
+        step = (_place(p, rising, *terms) - goal) / (rate * speed)
+        p = clip(finite(p - step), 0.0, 1.0)
+    full = float(1 << halvings)
+    lo_p = vmin(math.floor(p * full), full - 1.0) / full
+    hi_p = lo_p + 1.0 / full
+    if not _sure(lo_p, hi_p, goal, rising, margin, sane, terms):
+        part = float(1 << halfway)
+        a_h = math.floor(lo_p * part) / part
+        b_h = a_h + 1.0 / part
+        if not _sure(a_h, b_h, goal, rising, margin, sane, terms):
+            a_h, b_h = 0.0, 1.0
+            for _ in range(halfway):
+                m = (a_h + b_h) * 0.5
+                if _place(m, rising, *terms) < goal:
+                    a_h = m
+                else:
+                    b_h = m
+        for _ in range(halvings - halfway):
+            m = (a_h + b_h) * 0.5
+            if _place(m, rising, *terms) < goal:
+                a_h = m
+            else:
+                b_h = m
+        lo_p, hi_p = a_h, b_h
+    g_share = _g(0.5 * (lo_p + hi_p), r, c, rs)
+    return lo + dv * g_share if rising else lo + dv * (1.0 - g_share)
+
+
+@kernel
+def move_at(x: float, start_s: np.ndarray, hint: int) -> int:
+    """core.model.toolpath.ToolPath.move_at of one arc length: the number of ``start_s``
+    (sorted) at or below ``x``, less one, clipped to the moves (NaN: the last, as numpy's
+    searchsorted puts NaN past every number); looked for from the move ``hint`` on where
+    ``x`` lies there or after it, else by halving."""
+    n = start_s.size
+    if x != x:
+        return n - 1
+    lo, hi = 0, n  # below lo every start is at or below x, from hi on above it
+    if 0 <= hint < n and start_s[hint] <= x:
+        bound = 1  # (galloping from the hint: most samples stay on or near its move)
+        while hint + bound < n and start_s[hint + bound] <= x:
+            bound *= 2
+        lo, hi = hint + bound // 2 + 1, min(hint + bound, n)
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if start_s[mid] <= x:
+            lo = mid + 1
+        else:
+            hi = mid
+    return min(max(lo - 1, 0), n - 1)
+
+
+@kernel
+def profile_speed(
+    s: np.ndarray,
+    start_s: np.ndarray,
+    length: np.ndarray,
+    hold_start: np.ndarray,
+    hold_end: np.ndarray,
+    v_entry: np.ndarray,
+    v_exit: np.ndarray,
+    a_up: np.ndarray,
+    a_down: np.ndarray,
+    v_peak: np.ndarray,
+    ramps: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+    with_ramps: bool,
+    consts: tuple[float, float, float, int, int, int],
+) -> np.ndarray:
+    """core.engine.profile.Profile.speed_at at arc lengths ``s`` (with ToolPath.move_at):
+    ``ramps`` the profile's (lo_u, dv_u, lo_d, dv_d, acc, jerk) where
+    ``with_ramps``; ``consts`` (TOL.nil_speed, TOL.tiny, TOL.sure_compare, HALVINGS,
+    HALFWAY, NEWTON_STEPS)."""
+    lo_u, dv_u, lo_d, dv_d, acc, jerk = ramps
+    nil_speed = consts[0]
+    out = np.empty(s.size)
+    m = 0  # the last sample's move: the next is searched from there
+    # the last move's ramps (samples come along the path: most share their move's)
+    at_up = at_dn = -1
+    ramp_up = ramp_dn = _ramp(1.0, 1.0, 1.0, 0.0, 1.0, 1.0, consts)
+    for i in range(s.size):
+        m = move_at(s[i], start_s, m)
+        length_m = length[m]
+        d = clip(s[i] - start_s[m], 0.0, length_m)
+        into = vmax(d - hold_start[m], 0.0)
+        ve = v_entry[m]
+        up = math.sqrt(vmax(ve * ve + 2.0 * a_up[m] * into, 0.0))
+        rest = vmax(length_m - hold_end[m] - d, 0.0)
+        vx = v_exit[m]
+        down = math.sqrt(vmax(vx * vx + 2.0 * a_down[m] * rest, 0.0))
+        vp = v_peak[m]
+        v = vmin(vmin(up, down), vp)
+        if with_ramps:
+            if up <= down and up < vp and dv_u[m] > nil_speed:
+                if m != at_up:
+                    ramp_up = _ramp(lo_u[m], dv_u[m], a_up[m], ve, acc[m], jerk[m], consts)
+                    at_up = m
+                v = _ramp_speed(into, True, ramp_up, consts)
+            elif down < up and down < vp and dv_d[m] > nil_speed:
+                if m != at_dn:
+                    ramp_dn = _ramp(lo_d[m], dv_d[m], a_down[m], vx, acc[m], jerk[m], consts)
+                    at_dn = m
+                v = _ramp_speed(rest, False, ramp_dn, consts)
+        out[i] = v
+    return out
+
+
+@kernel
+def _key(
+    at: int,
+    qx: float,
+    qy: float,
+    qz: float,
+    guess: float,
+    px: np.ndarray,
+    py: np.ndarray,
+    pz: np.ndarray,
+    s_p: np.ndarray,
+    pass_tie: float,
+) -> tuple[float, float]:
+    """core.model.sampling.PathSamples._key for one point (``at`` clipped to the path)."""
+    at = min(max(at, 0), s_p.size - 1)
+    dx = px[at] - qx
+    dy = py[at] - qy
+    dz = pz[at] - qz
+    d2 = (dx * dx + dz * dz) + dy * dy
+    tie = (s_p[at] - guess) * pass_tie
+    return tie * tie + d2, d2
+
+
+@kernel
+def project_near(
+    q: np.ndarray,
+    guess: np.ndarray,
+    j: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+    pz: np.ndarray,
+    s_p: np.ndarray,
+    reach: np.ndarray,
+    clearance: np.ndarray,
+    half: int,
+    ints: tuple[int, int, int, int, int],
+    floats: tuple[float, float, float],
+) -> tuple[np.ndarray, np.ndarray]:
+    """core.model.sampling.PathSamples.project_near of finite points ``q`` ((m, 3)) with
+    finite guesses, ``j`` = searchsorted(s_p, guess): the same blocks, the same first look
+    where its probe says it pays, the same window search and foot, point by point.
+    ``reach`` and ``clearance``: PathSamples._reach and _clearance(half + NEAR_FIRST)
+    (empty where half < NEAR_FIRST); ``ints`` (NEAR_BLOCK, NEAR_PROBE, NEAR_FIRST,
+    CLEAR_FROM, COARSE), ``floats`` (NEAR_WORTH, NEAR_SLACK, TOL.pass_tie)."""
+    block, probe, first, clear_from, coarse_step = ints
+    worth, slack, pass_tie = floats
+    m = q.shape[0]
+    last = s_p.size - 1
+    best_i = np.empty(m, dtype=np.int64)
+    best_d2 = np.empty(m)
+    # the window's coarse offsets (PathSamples._window)
+    n_coarse = (2 * half) // coarse_step + 1
+    if -half + (n_coarse - 1) * coarse_step != half:
+        n_coarse += 1
+    coarse = np.empty(n_coarse, dtype=np.int64)
+    for c in range(n_coarse):
+        coarse[c] = min(-half + c * coarse_step, half)
+    seen = np.empty(n_coarse)
+    for start in range(0, m, block):
+        stop = min(start + block, m)
+        use_first = False
+        if half >= first:
+            probed = 0
+            hits = 0
+            for i in range(start, stop, probe):
+                probed += 1
+                if _near_first(
+                    i, q, guess, j, px, py, pz, s_p, clearance, first, clear_from, last,
+                    slack, pass_tie, best_i, best_d2,
+                ):  # fmt: skip
+                    hits += 1
+            use_first = probed > 0 and hits / probed >= worth
+        for i in range(start, stop):
+            if use_first and _near_first(
+                i, q, guess, j, px, py, pz, s_p, clearance, first, clear_from, last,
+                slack, pass_tie, best_i, best_d2,
+            ):  # fmt: skip
+                continue
+            _window(
+                i, q, guess, j, px, py, pz, s_p, reach, coarse, seen, last, slack, pass_tie,
+                best_i, best_d2,
+            )  # fmt: skip
+    return _between(q, best_i, best_d2, px, py, pz, s_p)
+
+
+@kernel
+def _near_first(
+    i: int,
+    q: np.ndarray,
+    guess: np.ndarray,
+    j: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+    pz: np.ndarray,
+    s_p: np.ndarray,
+    clearance: np.ndarray,
+    first: int,
+    clear_from: int,
+    last: int,
+    slack: float,
+    pass_tie: float,
+    best_i: np.ndarray,
+    best_d2: np.ndarray,
+) -> bool:
+    """PathSamples._near_first for point ``i``: its best point and squared distance into
+    ``best_i``, ``best_d2``, and whether it is the window's."""
+    ji = j[i]
+    qx, qy, qz, g = q[i, 0], q[i, 1], q[i, 2], guess[i]
+    bk, bd = _key(ji - first, qx, qy, qz, g, px, py, pz, s_p, pass_tie)
+    bo = -first
+    for off in range(-first + 1, first + 1):
+        key, d2 = _key(ji + off, qx, qy, qz, g, px, py, pz, s_p, pass_tie)
+        if key < bk:
+            bk, bd, bo = key, d2, off
+    b = min(max(ji + bo, 0), last)
+    best_i[i] = b
+    best_d2[i] = bd
+    near = clear_from - 1
+    if max(b - near, 0) < max(ji - first, 0) or min(b + near, last) > min(ji + first, last):
+        return False
+    low = clearance[b] - math.sqrt(bd) - slack
+    return low > 0 and low * low > bk
+
+
+@kernel
+def _window(
+    i: int,
+    q: np.ndarray,
+    guess: np.ndarray,
+    j: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+    pz: np.ndarray,
+    s_p: np.ndarray,
+    reach: np.ndarray,
+    coarse: np.ndarray,
+    seen: np.ndarray,
+    last: int,
+    slack: float,
+    pass_tie: float,
+    best_i: np.ndarray,
+    best_d2: np.ndarray,
+) -> None:
+    """PathSamples._window (_best_of over the coarse offsets, then _fill between two of
+    them where the triangle inequality does not rule them out) for point ``i``."""
+    ji = j[i]
+    qx, qy, qz, g = q[i, 0], q[i, 1], q[i, 2], guess[i]
+    bk, bd = _key(ji + coarse[0], qx, qy, qz, g, px, py, pz, s_p, pass_tie)
+    bo = coarse[0]
+    seen[0] = math.sqrt(bd)
+    for c in range(1, coarse.size):
+        key, d2 = _key(ji + coarse[c], qx, qy, qz, g, px, py, pz, s_p, pass_tie)
+        seen[c] = math.sqrt(d2)
+        if key < bk:
+            bk, bd, bo = key, d2, coarse[c]
+    for c in range(coarse.size - 1):
+        o1, o2 = coarse[c], coarse[c + 1]
+        if o2 - o1 < 2:
+            continue
+        low = 0.5 * (seen[c] + seen[c + 1] - reach[min(max(ji + o1, 0), last)]) - slack
+        if low > 0 and low * low > bk:
+            continue
+        for off in range(o1 + 1, o2):
+            key, d2 = _key(ji + off, qx, qy, qz, g, px, py, pz, s_p, pass_tie)
+            if key < bk or (key == bk and off < bo):
+                bk, bd, bo = key, d2, off
+    best_i[i] = min(max(ji + bo, 0), last)
+    best_d2[i] = bd
+
+
+@kernel
+def _between(
+    q: np.ndarray,
+    best_i: np.ndarray,
+    best_d2: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+    pz: np.ndarray,
+    s_p: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """PathSamples._between, point by point."""
+    m = q.shape[0]
+    last = s_p.size - 1
+    s = np.empty(m)
+    dist = np.empty(m)
+    for i in range(m):
+        qx, qy, qz = q[i, 0], q[i, 1], q[i, 2]
+        bi = best_i[i]
+        si = s_p[bi]
+        best = best_d2[i]
+        for a in (max(bi - 1, 0), bi):
+            b = min(a + 1, last)
+            ax, ay, az = px[a], py[a], pz[a]
+            abx, aby, abz = px[b] - ax, py[b] - ay, pz[b] - az
+            aqx, aqy, aqz = qx - ax, qy - ay, qz - az
+            l2 = (abx * abx + abz * abz) + aby * aby
+            u = clip(((aqx * abx + aqz * abz) + aqy * aby) / l2, 0.0, 1.0)
+            ex = aqx - abx * u
+            ey = aqy - aby * u
+            ez = aqz - abz * u
+            e2 = (ex * ex + ez * ez) + ey * ey
+            if l2 > 0.0 and e2 < best:
+                si = (s_p[b] - s_p[a]) * u + s_p[a]
+                best = e2
+        s[i] = si
+        dist[i] = math.sqrt(best)
+    return s, dist
+
+
+@kernel
+def chain_dv(
+    rising: bool,
+    phase: np.ndarray,
+    through: np.ndarray,
+    v0: np.ndarray,
+    v1: np.ndarray,
+    peak: np.ndarray,
+) -> np.ndarray:
+    """core.engine.profile._chain_dv, move by move."""
+    n = phase.size
+    cont = np.zeros(n + 1, dtype=np.bool_)
+    for k in range(n):
+        if rising:
+            cont[k] = through[k] and phase[k]
+        elif k > 0:
+            cont[k] = through[k + 1] and phase[k] and phase[k - 1]
+    upper = np.empty(n)
+    dv = np.empty(n)
+    for k in range(n):
+        if through[k + 1]:
+            upper[k] = v1[k] if rising else v0[k]
+        else:
+            upper[k] = peak[k]
+        dv[k] = upper[k] - (v0[k] if rising else v1[k])
+    k = 0
+    while k < n:
+        if not (cont[k] or cont[k + 1]):
+            k += 1
+            continue
+        first = k  # a chain of several moves: from here to the first without cont[k + 1]
+        while cont[k + 1]:
+            k += 1
+        last = k
+        if rising:
+            hi = upper[last] - v0[first]
+        else:
+            hi = upper[first] - v1[last]
+        for m in range(first, last + 1):
+            dv[m] = hi
+        k += 1
+    return dv
+
+
+@kernel
+def dense_round(
+    rising: bool,
+    phase: np.ndarray,
+    through: np.ndarray,
+    v0: np.ndarray,
+    v1: np.ndarray,
+    peak: np.ndarray,
+    a: np.ndarray,
+    last: np.ndarray,
+    term: np.ndarray,
+    off: np.ndarray,
+    acc: np.ndarray,
+    jerk: np.ndarray,
+    between: np.ndarray,
+    step: np.ndarray,
+    moved: np.ndarray,
+    piece: int,
+    nil_speed: float,
+    finite: bool,
+) -> tuple[float, bool, np.ndarray, np.ndarray]:
+    """core.engine.profile._Rounds._dense, move by move: the accelerations ``a`` and their
+    ``off``, ``term`` updated in place, this round's ``step`` and ``moved`` written; returns
+    the largest relative change, whether the terms are still plain, and the moves the
+    damping held back with their targets. The pieces of ``piece`` moves as there: a piece
+    where no acceleration moves keeps its ``off`` and ``term`` untouched."""
+    n = a.size
+    dv = chain_dv(rising, phase, through, v0, v1, peak)
+    out = np.empty(n)
+    behind = np.empty(n, dtype=np.int64)
+    wanted = np.empty(n)
+    n_behind = 0
+    change = 0.0
+    for start in range(0, n, piece):
+        stop = min(start + piece, n)
+        any_moved = False
+        for k in range(start, stop):
+            od = a[k]
+            # effective_acceleration(dv, acc, jerk, only=phase)
+            d, ak, jk = dv[k], acc[k], jerk[k]
+            new = ak  # (the quotients only where they are kept)
+            if math.isfinite(jk) and d > nil_speed and phase[k]:
+                t_full = d / ak + ak / jk
+                t_short = math.sqrt(d / jk) * 2.0
+                t = t_full if d >= ak * ak / jk else t_short
+                new = d / t
+            # the damping
+            ls = last[k]
+            o = new
+            if (new > od and ls < 0) or (new < od and ls > 0):
+                o = math.sqrt(od * new)
+                if o != new:
+                    behind[n_behind] = k
+                    wanted[n_behind] = new
+                    n_behind += 1
+            out[k] = o
+            step[k] = (1 if o > od else 0) - (1 if o < od else 0)
+            if o != od:  # (where o == od, o / od - 1 is 0 or NaN: no change either way)
+                rel = abs(o / od - 1.0)
+                if rel > change:  # (NaN skipped, as nanmax)
+                    change = rel
+            mv = o != od
+            moved[k] = mv
+            any_moved = any_moved or mv
+        if not any_moved:
+            continue
+        for k in range(start, stop):
+            if moved[k]:
+                a[k] = out[k]
+            off[k] = a[k] != acc[k]
+            tm = a[k] * vmax(between[k], 0.0) * 2.0
+            term[k] = tm
+            if not (math.isfinite(tm) and not tm < 0.0):
+                finite = False
+    return change, finite, behind[:n_behind].copy(), wanted[:n_behind].copy()
+
+
+@kernel
+def plain_passes(
+    b2: np.ndarray, up: np.ndarray, dn: np.ndarray, w: np.ndarray, bwd: np.ndarray, out: np.ndarray
+) -> None:
+    """core.engine.profile._passes_of with ``finite`` (no NaN, no -0.0, terms >= 0: fmin is
+    a plain comparison and the clamp at 0 is left out) into ``out``: the sums sequential
+    as np.cumsum's (the first term itself, then one term after the other), the minima
+    running as np.fmin.accumulate's (a NaN only past them, where a sum overflowed); ``w``
+    and ``bwd`` work arrays of b2's size."""
+    n1 = b2.size
+    # forward: both sums (the braking one into bwd) and the forward pass, three chains
+    # that overlap; backward: the backward pass, then the lower of the two and the cap
+    wu = wd = 0.0
+    least = b2[0]
+    for i in range(n1):
+        if i:
+            wu = up[0] if i == 1 else wu + up[i - 1]
+            wd = dn[0] if i == 1 else wd + dn[i - 1]
+        w[i] = wu
+        bwd[i] = wd
+        x = b2[i] - wu
+        if x < least:
+            least = x
+        out[i] = least + wu
+    least = b2[n1 - 1] + bwd[n1 - 1]
+    for i in range(n1 - 1, -1, -1):
+        wd = bwd[i]
+        x = b2[i] + wd
+        if x < least:
+            least = x
+        # (an overflowed sum gives NaN here: np.minimum's rules)
+        out[i] = math.sqrt(vmin(vmin(out[i], least - wd), b2[i]))
+
+
+@kernel
+def marks(
+    at: np.ndarray,
+    every: bool,
+    v: np.ndarray,
+    a_up: np.ndarray,
+    a_dn: np.ndarray,
+    between: np.ndarray,
+    cap: np.ndarray,
+    tols: tuple[float, float],
+    out: tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray, np.ndarray],
+) -> None:
+    """core.engine.profile._Rounds._all_marks (``every``: all moves) or _marks_of of the
+    moves ``at``, move by move into ``out`` = (peak, rise, fall, through_up, through_dn)
+    (through_*[k + 1] of move k); ``tols`` (TOL.rel_equal, TOL.nil_distance)."""
+    peak, rise, fall, through_up, through_dn = out
+    rel_equal, nil_distance = tols
+    count = a_up.size if every else at.size
+    for i in range(count):
+        k = i if every else at[i]
+        v0, v1, au, ad, lk = v[k], v[k + 1], a_up[k], a_dn[k], between[k]
+        q0 = v0 * v0
+        q1 = v1 * v1
+        pk = q0 / au + lk * 2.0 + q1 / ad
+        pk = pk / (1.0 / au + 1.0 / ad)
+        pk = vmax(vmin(cap[k], math.sqrt(vmax(pk, 0.0))), vmax(v0, v1))
+        t = vmax(pk, 1.0) * rel_equal
+        r = pk > v0 + t
+        f = pk > v1 + t
+        peak[k] = pk
+        rise[k] = r
+        fall[k] = f
+        flat = False
+        if r != f:  # the cruise length of a move that only accelerates or only brakes
+            pk2 = pk * pk
+            d_cr = lk - (pk2 - q0) / (2.0 * au)
+            d_cr = d_cr - (pk2 - q1) / (2.0 * ad)
+            flat = vmax(d_cr, 0.0) <= nil_distance
+        through_up[k + 1] = r and flat
+        through_dn[k + 1] = f and flat

@@ -1,0 +1,60 @@
+"""Whether the compiled kernels (:mod:`core.model.compiled`, numba) stand in for numpy.
+
+numba is optional (``pip install "ncperf[fast]"``). The kernels run the diagnosis's
+hottest loops (the profile's rounds and passes, the speed inside jerk-limited ramps, the
+projection of points onto the path) element by element with the same floating-point
+operations in the same order as numpy's array-wide code: the same bits
+(``tests/test_jit.py``). They are used where all three hold:
+
+* the diagnosis asked for them (:func:`allow`: :func:`core.diagnosis.align.align`,
+  :func:`core.diagnosis.diagnose.diagnose_cases` and
+  :func:`core.diagnosis.calibrate.calibrate` do): importing numba and loading its cached
+  kernels costs about 0.4 s, which the diagnosis's minutes of fits repay and a single
+  ``ncperf analyze`` would not;
+* numba is installed;
+* the environment variable ``NCPERF_NO_JIT`` is not set to a non-empty value other
+  than ``0``.
+
+Elsewhere numpy's code runs, as before. numba compiles the kernels on their first use after
+an install or a change (several seconds, once) and keeps them in its cache beside
+``compiled.py`` (or, where that folder is not writable, in the user's cache folder).
+"""
+
+from __future__ import annotations
+
+import os
+from functools import cache
+from types import ModuleType
+
+#: Set (to anything but "" or "0") to keep numpy's code where numba is installed.
+NO_JIT_ENV = "NCPERF_NO_JIT"
+
+_allowed = [False]  # (a list: set by allow() without a global statement)
+
+
+def allow() -> None:
+    """Let the kernels stand in for numpy from now on in this process (and in the worker
+    processes it forks): the diagnosis calls this."""
+    _allowed[0] = True
+
+
+def disabled() -> bool:
+    """Whether ``NCPERF_NO_JIT`` asks for numpy's code."""
+    return os.environ.get(NO_JIT_ENV, "") not in ("", "0")
+
+
+@cache
+def _load() -> ModuleType | None:
+    try:
+        from core.model import compiled as module
+    except ImportError:  # numba not installed (or not for this numpy)
+        return None
+    return module
+
+
+def compiled() -> ModuleType | None:
+    """The compiled kernels' module, or None: not :func:`allow`-ed, numba absent, or
+    ``NCPERF_NO_JIT`` set (read at every call, so a test may switch)."""
+    if not _allowed[0] or disabled():
+        return None
+    return _load()

@@ -1,0 +1,120 @@
+"""The compiled kernels (numba, the optional extra ``fast``) against numpy's code they stand
+in for: the same bits (core.model.jit). Skipped where numba is not installed."""
+
+from __future__ import annotations
+
+import dataclasses
+from functools import partial
+
+import numpy as np
+import pytest
+
+from core import Ncperf, load_preset
+from core.engine.profile import Profile, build_profile
+from core.model.jit import NO_JIT_ENV, allow, compiled
+from core.model.sampling import PROJECTION_STEP
+from tests.conftest import ROOT
+from tests.test_projection import _cases
+
+pytest.importorskip("numba", reason="numba (the extra 'fast') is not installed")
+
+PROGRAM = ROOT / "examples" / "zlevel_cavity_chords.ngc"
+
+
+@pytest.fixture(autouse=True)
+def _allowed() -> None:
+    allow()  # (as the diagnosis does)
+
+
+def _bits(x: np.ndarray) -> np.ndarray:
+    """The array's bytes as integers: NaN, -0.0 and +0.0 told apart."""
+    x = np.ascontiguousarray(x)
+    return x.view(np.int64) if x.dtype == np.float64 else x
+
+
+def _same(a: object, b: object) -> None:
+    if isinstance(a, tuple):
+        assert isinstance(b, tuple) and len(a) == len(b)
+        for x, y in zip(a, b, strict=True):
+            _same(x, y)
+    elif isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape
+        np.testing.assert_array_equal(_bits(a), _bits(b))
+    else:
+        assert a == b
+
+
+def _both(monkeypatch, fn):
+    """``fn()`` with numpy's code, then with the kernels."""
+    monkeypatch.setenv(NO_JIT_ENV, "1")
+    assert compiled() is None
+    plain = fn()
+    monkeypatch.delenv(NO_JIT_ENV)
+    assert compiled() is not None
+    return plain, fn()
+
+
+@pytest.mark.parametrize("preset", ["siemens-840d", "linuxcnc-sim"])
+def test_profile_and_its_speeds_are_numpys(monkeypatch, preset):
+    """The rounds over whole columns (dense_round) and the speed at arc lengths
+    (profile_speed), with a jerk limit (840D: the ramps' bisection) and without."""
+    nc = Ncperf()
+    ev = nc.evaluate(nc.extract(str(PROGRAM)), load_preset(preset))
+    plain, fast = _both(monkeypatch, lambda: build_profile(ev))
+    for f in dataclasses.fields(Profile):
+        if f.name != "evaluation":
+            _same(getattr(plain, f.name), getattr(fast, f.name))
+    assert (plain.ramps is None) == (preset == "linuxcnc-sim")
+    tp = ev.toolpath
+    rng = np.random.default_rng(5)
+    s = np.concatenate(
+        [
+            np.linspace(-1.0, tp.end_s[-1] + 1.0, 200_001),
+            tp.start_s,  # the moves' boundaries
+            np.nextafter(tp.start_s, np.inf),
+            rng.uniform(0.0, tp.end_s[-1], 50_000),  # out of order
+            [np.nan, np.inf, -np.inf, 0.0, -0.0],
+        ]
+    )
+    a, b = _both(monkeypatch, lambda: plain.speed_at(s))
+    _same(a, b)
+
+
+def test_projection_is_numpys(monkeypatch):
+    """project_near's window search and foot, point by point, on the paths of
+    tests/test_projection.py (zigzag chords, a path over itself, arcs): guesses near and
+    far, narrow and wide windows, points on the samples and between them (ties)."""
+    for tp, rng in _cases():
+        samples = tp.sample(PROJECTION_STEP)
+        for half_width in (0.1, 1.0, 2.5):
+            for spread, off in ((0.0, 0.4), (0.02, 0.02), (0.3, 0.4), (2.0, 0.4)):
+                s_true = rng.uniform(-0.5, tp.end_s[-1] + 0.5, 20_000)
+                q = tp.point_at(s_true) + rng.normal(0.0, spread, (s_true.size, 3))
+                guess = s_true + rng.normal(0.0, off, s_true.size)
+                _same(*_both(monkeypatch, partial(samples.project_near, q, guess, half_width)))
+        mid = 0.5 * (samples.points[1:] + samples.points[:-1])
+        g = 0.5 * (samples.s[1:] + samples.s[:-1])
+        _same(*_both(monkeypatch, partial(samples.project_near, mid, g)))
+
+
+def test_no_jit_switch(monkeypatch):
+    for value, off in (("1", True), ("yes", True), ("0", False), ("", False)):
+        monkeypatch.setenv(NO_JIT_ENV, value)
+        assert (compiled() is None) == off
+
+
+def test_analyze_does_not_load_numba():
+    """`ncperf analyze` does not pay numba's start-up (core.model.jit): the kernels are the
+    diagnosis's, allowed by it."""
+    import subprocess
+    import sys
+
+    code = (
+        "import sys; from core.cli import main\n"
+        "try:\n    main(['analyze', sys.argv[1]])\nexcept SystemExit:\n    pass\n"
+        "assert 'numba' not in sys.modules, 'numba imported'\n"
+    )
+    out = subprocess.run(
+        [sys.executable, "-c", code, str(PROGRAM)], capture_output=True, text=True, cwd=ROOT
+    )
+    assert out.returncode == 0, out.stderr
