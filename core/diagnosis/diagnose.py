@@ -261,11 +261,12 @@ def diagnose_cases(
     stretched = frozenset(
         r.name for r in results if bounded(effects[r.name], r.params, base.machine)
     )
+    # (only those that would be named matter: the others cost no prediction)
     idle = frozenset(
         r.name
         for r in results
         if r.moved == 0
-        and r.held_out_gap_after < r.held_out_gap_before
+        and clears(r.held_out_gap_before, r.held_out_gap_after, r.p, floor, BEST_SHARE)
         and _changes_nothing(indicators_of, tps, base, effects[r.name], before, data)
     )
     results, best, reason = decide(results, floor, folded, stretched, idle)
