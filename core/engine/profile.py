@@ -1368,7 +1368,7 @@ class _Rounds:
         # back), with their targets: the next round's candidates beside the changed ramps
         behind = out != new
         at_behind = np.flatnonzero(behind) if isinstance(cand, slice) else cand[behind]
-        self.behind[rising] = (at_behind, new[behind])
+        kept = (at_behind, new[behind])
         del behind, at_behind
         # the terms follow where the acceleration changed
         moved = out != old
@@ -1378,16 +1378,12 @@ class _Rounds:
             out = out[moved]
         del moved
         a[cand] = out
-        self.moved.append(cand)
         off[cand] = out != acc[cand]
         terms = _pass_terms(out, self.holds.inner(cand))
         term[cand] = terms
         if self.finite and not _plain_terms(terms):
             self.finite = False
-        if rising:
-            self.step_up = step
-        else:
-            self.step_dn = step
+        self._keep_round(rising, step, cand, kept)
         return change
 
     def _dense(self, rising, phase, through, v0, v1, peak) -> float:
@@ -1418,12 +1414,7 @@ class _Rounds:
                 rising, phase, through, v0, v1, peak, a, last, term, off, acc, jerk,
                 between, step, moved, CACHE_PIECE, TOL.nil_speed, self.finite,
             )  # fmt: skip
-            self.behind[rising] = (at, want)
-            self.moved.append(moved)
-            if rising:
-                self.step_up = step
-            else:
-                self.step_dn = step
+            self._keep_round(rising, step, moved, (at, want))
             return float(change)
         dv = _chain_dv(rising, phase, through, v0, v1, peak)
         step = np.empty(n, dtype=np.int8)
@@ -1473,16 +1464,25 @@ class _Rounds:
             if finite and not _plain_terms(tm):  # (the others were plain)
                 finite = False
         self.finite = finite
-        self.behind[rising] = (
+        behind = (
             np.concatenate(at_behind) if at_behind else np.zeros(0, dtype=np.intp),
             np.concatenate(wanted) if wanted else np.zeros(0),
         )
+        self._keep_round(rising, step, moved, behind)
+        return change
+
+    def _keep_round(
+        self, rising: bool, step: NDArray, moved: NDArray | slice, behind: tuple[NDArray, NDArray]
+    ) -> None:
+        """What a round of one direction leaves for the next: each move's step sign, the
+        moves it changed (a mask over all of them, or their indices: :meth:`_direction`'s
+        candidates), the moves the damping held back and their targets."""
+        self.behind[rising] = behind
         self.moved.append(moved)
         if rising:
             self.step_up = step
         else:
             self.step_dn = step
-        return change
 
     def _everywhere(self, rising, phase, through, v0, v1, peak):
         """The candidates of :meth:`_direction` over all the moves: where the target (the
