@@ -809,3 +809,85 @@ def test_an_idle_effect_is_not_named_but_one_that_moved_still_is():
     _, best, reason = decide([block], floor=10.0, idle=frozenset({"block_cycle_time"}))
     assert best is None and "machine file's values" in reason
     assert decide([block, tol], 5.0, idle=frozenset({"block_cycle_time"}))[1] == "corner_tolerance"
+
+
+def pockets(count=6, feed=20.0):
+    """Squares of 10 mm cut in the XY plane at F ``feed`` (mm/s), each reached by rapids:
+    up 20 mm in Z, 30 mm along X and Y at 45 degrees, along X, or along Y in turn, down 20
+    mm. The feed moves have no Z motion: a Z axis's limits show on the rapids alone."""
+    moves: list[dict] = []
+    x = y = 0.0
+    for k in range(count):
+        dx, dy = [(30, 30), (30, 0), (0, 30)][k % 3]
+        moves += [
+            {"end": (x + 10, y, 0)},
+            {"end": (x + 10, y + 10, 0)},
+            {"end": (x, y + 10, 0)},
+            {"end": (x, y, 0)},
+            {"end": (x, y, 20), "rapid": True},
+            {"end": (x + dx, y + dy, 20), "rapid": True},
+            {"end": (x + dx, y + dy, 0), "rapid": True},
+        ]
+        x, y = x + dx, y + dy
+    return path(moves, feed=feed)
+
+
+def test_a_z_acceleration_the_feed_moves_never_meet_is_found_on_the_rapids(nc):
+    """The pockets' Z axis at 0.3 of the machine file's acceleration (750 of 2500 mm/s^2,
+    jerk unlimited): a 20 mm Z rapid (axes 500 mm/s) is a triangle in speed, 2 sqrt(L / a)
+    long: 0.179 s at 2500 mm/s^2, 0.327 s at 750. The feed moves (XY, 20 mm/s) run as the
+    machine file says: on them no effect clears the floor, and the diagnosis fits the
+    effects that act on the rapids there: axis_dynamics with accel_scale x accel_z = 0.3."""
+    tp = pockets()
+    m = machine(jerk=(INF, INF, INF))
+    effects = nc.effects()
+    base = Setup(machine=m)
+    slow_z = machine(acc=(2.5, 2.5, 0.75), jerk=(INF, INF, INF))
+    tr = synthetic_trace(nc, tp, Setup(machine=slow_z))
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", effects)
+    assert d.best_effect == "axis_dynamics" and d.on_rapids
+    assert d.chosen == ("axis_dynamics",)
+    p = d.chosen_params["axis_dynamics"]
+    assert p["accel_scale"] * p["accel_z"] == pytest.approx(0.3, rel=0.05)
+    assert p["accel_scale"] * p["accel_x"] == pytest.approx(1.0, rel=0.05)
+    top = d.rapid_effects[0]
+    assert top.name == "axis_dynamics"
+    assert top.held_out_gap_after < 0.1 * top.held_out_gap_before
+    assert "on the rapids" in d.reason
+    # on the feed moves alone nothing cleared the floor
+    assert all(r.held_out_gap_before - r.held_out_gap_after < d.floor for r in d.effects)
+    from core.cli.diagnosis_report import report, to_json
+
+    text = report(d, program="pockets", machine="test", labels=["t"], effects=effects)
+    assert "on the rapids    no effect cleared the floor on the feed moves" in text
+    assert "[effects.axis_dynamics]" in text
+    js = json.loads(json.dumps(to_json(d, m, effects)))
+    assert js["decision"]["on"] == "rapids"
+    assert [r["name"] for r in js["rapid_effects"]][0] == "axis_dynamics"
+
+
+def test_a_path_speed_cap_above_the_feeds_is_found_on_the_rapids(nc):
+    """A path speed cap of 150 mm/s (axes 500 mm/s, F 20 mm/s): only the rapids reach it.
+    Axis limits cannot stand for it: X at 150 mm/s lets the 45-degree XY rapids run at 150
+    sqrt(2) = 212 mm/s, X at 106 holds the rapids along X to 106. path_feed_limit is named,
+    max_feed 150 mm/s."""
+    tp = pockets()
+    m = machine(jerk=(INF, INF, INF))
+    effects = nc.effects()
+    base = Setup(machine=m)
+    capped = dataclasses.replace(m, max_path_feed=150.0)
+    tr = synthetic_trace(nc, tp, Setup(machine=capped))
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", effects)
+    assert d.best_effect == "path_feed_limit" and d.on_rapids
+    assert d.chosen_params["path_feed_limit"]["max_feed"] == pytest.approx(150.0, rel=0.02)
+
+
+def test_rapids_as_the_machine_file_says_name_nothing(nc):
+    """The pockets run as the machine file says: the rapids are fitted (nothing on the feed
+    moves cleared the floor) and name nothing either."""
+    tp = pockets()
+    base = Setup(machine=machine(jerk=(INF, INF, INF)))
+    tr = synthetic_trace(nc, tp, base)
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", nc.effects())
+    assert d.best_effect is None and d.chosen == () and not d.on_rapids
+    assert {r.name for r in d.rapid_effects} == {"axis_dynamics", "path_feed_limit"}

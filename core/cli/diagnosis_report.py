@@ -127,17 +127,44 @@ def report(
         f"gap, {d.floor:.1f} mm/min ({d.floor_source}), significant at p <= {SIG_P:g} over "
         "the held-out pieces"
     )
+    if d.rapid_effects:
+        lines.append(
+            "  on the rapids    no effect cleared the floor on the feed moves: the effects "
+            "that act on the rapids too,"
+        )
+        lines.append(
+            "                   fitted on alternate rapids; gap on the other rapids (mm/min), "
+            "and on the held-out feed moves:"
+        )
+        rp = [_fmt_params(r.params, effects[r.name]) for r in d.rapid_effects]
+        wid = max([len("parameters"), *map(len, rp)])
+        lines.append(
+            f"    {'#':>2s}  {'effect':28s} {'parameters':{wid}s} {'before':>8s} "
+            f"{'after':>8s} {'removed':>8s} {'feed':>8s}"
+        )
+        for k, (r, ps) in enumerate(zip(d.rapid_effects, rp, strict=True), start=1):
+            lines.append(
+                f"    {k:2d}  {r.name:28s} {ps:{wid}s} {r.held_out_gap_before:8.0f} "
+                f"{r.held_out_gap_after:8.0f} {r.removed * 100:7.0f}% {r.rapid_gap:8.1f}"
+            )
+        lines.append(
+            f"                   (the same test, the rapids' floor {d.rapid_floor:.0f} mm/min; "
+            "and the held-out feed moves' gap no worse than the floor)"
+        )
     if d.best_effect is None:
         lines.append(
             f"  best effect      {d.reason} (what is left is noise, or an effect not in this list)"
         )
     else:
         lines.append(f"  best effect      {d.reason}")
-        lines.append(
-            f"  chosen           {' + '.join(d.chosen)} (each removing at least "
-            f"{ADD_SHARE:.0%} of what was left on held-out data, until less than "
-            f"{STOP_SHARE:.0%} of the gap was left)"
-        )
+        if d.on_rapids:
+            lines.append(f"  chosen           {' + '.join(d.chosen)} (found on the rapids)")
+        else:
+            lines.append(
+                f"  chosen           {' + '.join(d.chosen)} (each removing at least "
+                f"{ADD_SHARE:.0%} of what was left on held-out data, until less than "
+                f"{STOP_SHARE:.0%} of the gap was left)"
+            )
     lines.append(f"  gap after        {d.gap_rms_after:.1f} mm/min")
     if d.chosen:
         lines += _zone_table("  where it remains", d.zones_after[:5])
@@ -211,8 +238,25 @@ def to_json(
             }
             for r in d.effects
         ],
+        "rapid_effects": [
+            {
+                "name": r.name,
+                "params": {k: round(v, 6) for k, v in r.params.items()},
+                "held_out_rapid_gap_before": round(r.held_out_gap_before, 3),
+                "held_out_rapid_gap_after": round(r.held_out_gap_after, 3),
+                "removed": round(r.removed, 4),
+                "p": round(r.p, 5),
+                "parameters_moved": r.moved,
+                "held_out_feed_gap": round(r.rapid_gap, 3),
+            }
+            for r in d.rapid_effects
+        ],
         "best_effect": d.best_effect,
         "decision": {
+            "on": "rapids" if d.on_rapids else "feed moves",
+            "rapid_floor_mm_min": (
+                round(d.rapid_floor, 3) if math.isfinite(d.rapid_floor) else None
+            ),
             "reason": d.reason,
             "floor_mm_min": round(d.floor, 3),
             "floor_source": d.floor_source,

@@ -29,6 +29,7 @@ from core.diagnosis.rules import (
     GAP_PERIODS,
     JUMP_K,
     MAX_POINTS,
+    MIN_RAPID_POINTS,
     PER_MIN,
     PIECES,
     REVERSAL,
@@ -64,6 +65,9 @@ class Data:
     rapid_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
     rapid_v: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
     rapid_weight: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
+    rapid_move: NDArray[np.int64] = field(
+        default_factory=lambda: np.zeros(0, dtype=np.int64), repr=False
+    )
 
 
 def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
@@ -104,11 +108,11 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
         grid, move = grid[~hole], move[~hole]
     v = np.interp(grid, s_u, v_u)
     keep = tp.is_feed[move]
-    rapid_s, rapid_v = grid[~keep], v[~keep]
+    rapid_s, rapid_v, rapid_move = grid[~keep], v[~keep], move[~keep]
     # time weights floored at TIME_FLOOR of the fastest measured rapid (no rapid: none kept)
     slowest = TIME_FLOOR * float(rapid_v.max(initial=0.0))
     if not slowest > 0:
-        rapid_s, rapid_v = rapid_s[:0], rapid_v[:0]
+        rapid_s, rapid_v, rapid_move = rapid_s[:0], rapid_v[:0], rapid_move[:0]
     rapid_weight = step / np.maximum(rapid_v, slowest)
     grid, move, v = grid[keep], move[keep], v[keep]
     feed = tp.feed[move]
@@ -126,6 +130,7 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
         rapid_s=rapid_s,
         rapid_v=rapid_v,
         rapid_weight=rapid_weight,
+        rapid_move=rapid_move,
     )
 
 
@@ -318,6 +323,35 @@ def rapid_gap(preds: Sequence[Prediction], data: Sequence[Data]) -> float:
         sq += float(np.sum(d.rapid_weight * r * r))
         n += float(d.rapid_weight.sum())
     return math.sqrt(sq / n) * PER_MIN if n > 0 else math.nan
+
+
+def rapid_data(data: Sequence[Data]) -> tuple[list[Data], str]:
+    """The rapids of every run as data of their own -- speed and time weight on the same
+    kind of grid, the fastest measured rapid of the run standing for F -- split into
+    calibration and held-out data as the feed moves are (:func:`split`). Runs with fewer
+    than MIN_RAPID_POINTS grid points on rapids are left out."""
+    views = [
+        dataclasses.replace(
+            d,
+            s=d.rapid_s,
+            v=d.rapid_v,
+            feed=np.full(d.rapid_s.size, float(d.rapid_v.max())),
+            move=d.rapid_move,
+            weight=d.rapid_weight,
+            calibration=np.ones(d.rapid_s.size, dtype=bool),
+            chunk=None,
+            memo={},
+            rapid_s=d.rapid_s[:0],
+            rapid_v=d.rapid_v[:0],
+            rapid_weight=d.rapid_weight[:0],
+            rapid_move=d.rapid_move[:0],
+        )
+        for d in data
+        if d.rapid_s.size >= MIN_RAPID_POINTS
+    ]
+    if not views:
+        return [], "no rapids"
+    return split(views)
 
 
 def feed_level(data: Sequence[Data]) -> float:

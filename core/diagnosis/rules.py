@@ -27,6 +27,9 @@ CHUNKS = 16
 #: Every stretch is cut into this many pieces of equal length: the samples of the decision
 #: rule's significance test (8 held-out stretches of one run give 32).
 PIECES = 4
+#: Grid points on rapids a run needs for its rapids to be data of their own (one per piece
+#: of the significance test, twice over: :func:`core.diagnosis.resample.rapid_data`).
+MIN_RAPID_POINTS = 2 * CHUNKS * PIECES
 #: Gaps are reported in mm/min (as F words); the diagnosis computes in mm/s.
 PER_MIN = 60.0
 

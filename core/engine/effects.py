@@ -168,6 +168,8 @@ class Effect:
         Documented values of parameters (see the attribute).
     size : callable ({name: value}) -> int, optional
         The parameters an explanation really uses (see the attribute).
+    rapids : bool
+        The effect acts on the rapids as on the feed moves (see the attribute).
     """
 
     name: str
@@ -186,6 +188,11 @@ class Effect:
     #: decision rule compares), from its values; None: those moved from where the fit
     #: started. For parameterisations with redundancy (a uniform scale and per-axis factors).
     size: Callable[[Mapping[str, float]], int] | None = field(default=None, repr=False)
+    #: The effect is a limit the rapids meet as the feed moves do (an axis's speed or
+    #: acceleration, a path speed cap): where the feed moves show no effect, the diagnosis
+    #: fits it on the rapids (:mod:`core.diagnosis.diagnose`). Feed overrides, tolerances,
+    #: block times are not: they leave the rapids alone or do not show there.
+    rapids: bool = False
 
     def folded(self, machine: Machine) -> dict[str, float]:
         """The parameters the machine's ``[effects.NAME]`` table gives (defaults filled in),

@@ -63,6 +63,7 @@ EFFECT = Effect(
     relative=UNIFORM + PER_AXIS,
     stages=(UNIFORM, PER_AXIS),
     size=_size,
+    rapids=True,
 )
 
 

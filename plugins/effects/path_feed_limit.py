@@ -27,6 +27,7 @@ EFFECT = Effect(
         machine=dataclasses.replace(setup.machine, max_path_feed=p["max_feed"])
     ),
     doc="a path speed limit over all axes (LinuxCNC MAX_LINEAR_VELOCITY)",
+    rapids=True,
 )
 
 
