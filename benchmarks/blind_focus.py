@@ -51,13 +51,16 @@ def main() -> int:
         print(f"recorded {k + 1}/{2 * len(cases)} {c.name} {c.variant.key}", file=sys.stderr)
     with mp.get_context("fork").Pool(args.jobs) as pool:
         res = pool.map(blind.diagnose_case, [(c, str(cache)) for c in cases + twins])
-    print("| program | changed | feed time moved | named first | top effect | gap | floor |")
-    print("|---|---|---|---|---|---|---|")
+    print(
+        "| program | changed | feed time moved | rapid time moved | named first | top effect "
+        "| gap | floor |"
+    )
+    print("|---|---|---|---|---|---|---|---|")
     for r in res:
         c = r["case"]
-        moved = blind.visibility(c, cache) if c.variant.effect else math.nan
+        feed, rapid = blind.visibility(c, cache) if c.variant.effect else (math.nan, math.nan)
         print(
-            f"| {c.name} | {c.variant.label} | {moved:+.2%} | {r['named']} | "
+            f"| {c.name} | {c.variant.label} | {feed:+.2%} | {rapid:+.2%} | {r['named']} | "
             f"{r['top']} {r['removed']:.0%} | {r['gap']:.1f} | {r['floor']:.1f} |"
         )
     hits = sum(r["named"] == r["case"].variant.effect for r in res[: len(cases)])

@@ -360,24 +360,30 @@ def record(case: Case, cache: Path) -> Path:
 TRAVERSE = 1
 
 
-def feed_time(trace: Path) -> float:
+def motion_times(trace: Path) -> tuple[float, float]:
     """Seconds a LinuxCNC trace spends in feed moves (samples of motion type above a rapid
-    while moving, times the sample period): the part of a run the diagnosis compares."""
+    while moving, times the sample period) and in rapids (motion type rapid, moving): the
+    parts of a run the diagnosis compares."""
     d = np.genfromtxt(trace, delimiter=",", names=True, usecols=("t", "v", "mtype"))
     dt = float(np.median(np.diff(d["t"])))
-    return float(np.count_nonzero((d["mtype"] > TRAVERSE) & (d["v"] > 0.0))) * dt
+    moving = d["v"] > 0.0
+    feed = np.count_nonzero((d["mtype"] > TRAVERSE) & moving)
+    rapid = np.count_nonzero((d["mtype"] == TRAVERSE) & moving)
+    return float(feed) * dt, float(rapid) * dt
 
 
-def visibility(c: Case, cache: Path) -> float:
+def visibility(c: Case, cache: Path) -> tuple[float, float]:
     """How much a case's setting changes LinuxCNC's own motion, independent of ncperf: the
-    relative change of the feed time against the same program run on the unchanged machine
-    (recorded for it; NaN for a lag or filter put on a trace afterwards, whose feed time it
-    leaves as it is, and for the controls)."""
+    relative change of the feed time and of the rapid time against the same program run on
+    the unchanged machine (recorded for it; NaN for a lag or filter put on a trace
+    afterwards, whose times it leaves as they are, for the controls, and for the rapid time
+    of a program without rapids)."""
     v = c.variant
     if v.effect is None or v.post is not None:
-        return math.nan
-    base = record(Case(CONTROL, c.family, c.seed), cache)
-    return feed_time(record(c, cache)) / feed_time(base) - 1.0
+        return math.nan, math.nan
+    feed0, rapid0 = motion_times(record(Case(CONTROL, c.family, c.seed), cache))
+    feed1, rapid1 = motion_times(record(c, cache))
+    return feed1 / feed0 - 1.0, rapid1 / rapid0 - 1.0 if rapid0 > 0 else math.nan
 
 
 def diagnose_case(args: tuple[Case, str]) -> dict:
@@ -456,7 +462,7 @@ def main() -> int:
     for k, c in enumerate(todo):
         record(c, cache)
         print(f"recorded {k + 1}/{len(todo)} {c.name} {c.variant.key}", file=sys.stderr, flush=True)
-    shown: dict[str, float] = {}
+    shown: dict[str, tuple[float, float]] = {}
     if args.visibility:
         for k, c in enumerate(todo):
             shown[c.name] = visibility(c, cache)
@@ -528,36 +534,45 @@ def main() -> int:
     return 0
 
 
-#: Feed-time changes (of LinuxCNC's own motion, by the changed setting) the visibility
-#: summary counts below: a setting that moves the feed time by less changes little a trace
-#: can show -- what it changes may still show in the speed at a few places.
+#: Time changes (of LinuxCNC's own motion, by the changed setting) the visibility summary
+#: counts below: a setting that moves the time by less changes little a trace can show --
+#: what it changes may still show in the speed at a few places.
 SHOWN_BELOW = (0.002, 0.005)
 
 
-def print_visibility(changed: list[dict], shown: dict[str, float]) -> None:
-    """The changed settings by how much they change LinuxCNC's own feed time (``--visibility``):
-    per case, then the hit rate where the change is at least each of SHOWN_BELOW."""
+def print_visibility(changed: list[dict], shown: dict[str, tuple[float, float]]) -> None:
+    """The changed settings by how much they change LinuxCNC's own feed time and rapid time
+    (``--visibility``): per case, then the hit rate where the change is at least each of
+    SHOWN_BELOW -- of the feed time (the feed moves: what the diagnosis compares first), and
+    of the feed or the rapid time (it fits the axes' limits on the rapids where the feed
+    moves show nothing)."""
     print()
-    print("LinuxCNC's own feed time, changed setting against the unchanged machine:")
+    print("LinuxCNC's own feed and rapid time, changed setting against the unchanged machine:")
     print()
-    print("| program | changed | feed time change | named first |")
-    print("|---|---|---|---|")
-    rows = [(r, shown.get(r["case"].name, math.nan)) for r in changed]
-    for r, x in rows:
+    print("| program | changed | feed time change | rapid time change | named first |")
+    print("|---|---|---|---|---|")
+    rows = [(r, *shown.get(r["case"].name, (math.nan, math.nan))) for r in changed]
+    for r, feed, rapid in rows:
         c = r["case"]
-        what = "(lag/filter put on the trace)" if math.isnan(x) else f"{x:+.2%}"
-        print(f"| {c.name} | {c.variant.label} | {what} | {r['named']} |")
+        what = "(lag/filter put on the trace)" if math.isnan(feed) else f"{feed:+.2%}"
+        rap = "" if math.isnan(rapid) else f"{rapid:+.2%}"
+        print(f"| {c.name} | {c.variant.label} | {what} | {rap} | {r['named']} |")
     print()
-    for limit in SHOWN_BELOW:
-        small = [(r, x) for r, x in rows if abs(x) < limit]
-        rest = [r for r, x in rows if not abs(x) < limit]
-        hits = sum(r["named"] == r["case"].variant.effect for r in rest)
-        named = sum(r["named"] == r["case"].variant.effect for r, _ in small)
-        print(
-            f"feed time moved by less than {limit:.1%}: {len(small)} cases ({named} named); "
-            f"named first among the other {len(rest)} (lags and filters included): "
-            f"{hits}/{len(rest)} ({hits / max(len(rest), 1):.0%})"
-        )
+    for which, moved in (
+        ("feed time", lambda f, _: abs(f)),
+        ("feed or rapid time", lambda f, r: max(abs(f), 0.0 if math.isnan(r) else abs(r))),
+    ):
+        for limit in SHOWN_BELOW:
+            # (a lag or filter -- NaN -- counts as shown)
+            small = [(r, f) for r, f, x in rows if moved(f, x) < limit]
+            rest = [r for r, f, x in rows if not moved(f, x) < limit]
+            hits = sum(r["named"] == r["case"].variant.effect for r in rest)
+            named = sum(r["named"] == r["case"].variant.effect for r, _ in small)
+            print(
+                f"{which} moved by less than {limit:.1%}: {len(small)} cases ({named} named); "
+                f"named first among the other {len(rest)} (lags and filters included): "
+                f"{hits}/{len(rest)} ({hits / max(len(rest), 1):.0%})"
+            )
 
 
 if __name__ == "__main__":

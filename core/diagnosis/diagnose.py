@@ -27,6 +27,10 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    they show wrong (a rapid gap over twice the least and the floor); then one the machine
    file does not set, one whose fit did not run to a bound, the one with the fewest
    parameters the data moved and the first in EFFECT_PRIORITY are named, in that order.
+   Where nothing clears the test on the feed moves, the effects that also act on the rapids
+   (an axis's speed or acceleration, a path speed cap) are fitted on alternate rapids and
+   one is named by the same test on the other rapids, with the rapids' own floor, unless
+   the feed moves contradict it (:func:`_on_rapids`).
    "None" is an answer: the model already explains the trace, or what is left is noise or
    an effect not in the list. Effects are then added greedily while each
    clears the same test on what is left (ADD_SHARE of it), until less than STOP_SHARE of the
