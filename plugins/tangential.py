@@ -473,8 +473,11 @@ def linuxcnc_arc_ratio(tp: ToolPath, k: NDArray[np.int64], machine: Machine, sha
       spiral length S = hypot(R |angle|, spiral) and the whole length L = hypot(S, rise),
       v = L / max(S / v_pl, straight-line time of the end point at the axes' speeds) and
       a = L / max(S / a_p, the same at the axes' accelerations); the top speed is then at
-      most the path limit and the arc's length over one servo period
-      (``tcClampVelocityByLength``).
+      most the arc's length over one servo period (``tcClampVelocityByLength``). The path
+      speed limit ([TRAJ]MAX_LINEAR_VELOCITY, the planner's vLimit) does not enter:
+      ``tcSetupMotion`` sets the segment's maxvel from canon's v above, and vLimit clips
+      only the speed the segment is run at (``tpGetRealTargetVel``) -- a 55 mm/s limit
+      above a spiral pocket's F3000 leaves LinuxCNC's feed moves as they were.
     - The overall acceleration a_o = a x ``share`` (what the arc's junctions take: a
       parabolic blend halves it, a kink its ratio; ``tcGetOverallMaxAccel``).
     - a_n = v^2 / R_e with LinuxCNC's effective radius of a helix,
@@ -507,10 +510,7 @@ def linuxcnc_arc_ratio(tp: ToolPath, k: NDArray[np.int64], machine: Machine, sha
         length = np.hypot(s_len, rise)
         v = length / np.fmax(s_len / v_pl, (np.abs(d) / vel).max(axis=1))
         a = length / np.fmax(s_len / a_p, (np.abs(d) / acc).max(axis=1))
-        v = np.fmin(
-            np.fmin(v, machine.max_path_feed),
-            tp.length[k] / servo_period(machine),
-        )
+        v = np.fmin(v, tp.length[k] / servo_period(machine))
         a_o = a * share
         r_e = rise * rise / r_min + r_min
         a_n = v * v / r_e

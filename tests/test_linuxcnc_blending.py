@@ -514,3 +514,10 @@ def test_linuxcnc_helix_tangential_share(tmp_path, turns, pitch, expected):
 
     a_axes = lowest_axis(tp.axis_share, np.array([k]), np.asarray(m.max_acceleration))[0][0]
     assert prof.a_up[k] == pytest.approx(a_axes * 0.5 * 0.5 * share / 0.5, rel=1e-3)
+    # A path speed limit of 40 mm/s (under v) leaves the share as it was: LinuxCNC sets the
+    # segment's maxvel from canon's v (tcSetupMotion) and the limit (the planner's vLimit)
+    # clips only the speed it runs at (tpGetRealTargetVel). Were v capped at 40, a_n would
+    # be 1600 / 14.077 = 114 and the share 0.994.
+    capped = dataclasses.replace(m, max_path_feed=40.0)
+    prof40 = ncp.predict(tp, setup_for(capped, ncp.effects())).profile
+    assert prof40.a_up[k] == pytest.approx(a_axes * 0.5 * 0.5 * share / 0.5, rel=1e-3)
