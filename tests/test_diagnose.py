@@ -856,6 +856,9 @@ def test_a_z_acceleration_the_feed_moves_never_meet_is_found_on_the_rapids(nc):
     assert "on the rapids" in d.reason
     # on the feed moves alone nothing cleared the floor
     assert all(r.held_out_gap_before - r.held_out_gap_after < d.floor for r in d.effects)
+    # ... though the axes were fitted there on the calibration rapids too: Z at 0.3 as well
+    q = next(r.params for r in d.effects if r.name == "axis_dynamics")
+    assert q["accel_scale"] * q["accel_z"] == pytest.approx(0.3, rel=0.05)
     from core.cli.diagnosis_report import report, to_json
 
     text = report(d, program="pockets", machine="test", labels=["t"], effects=effects)

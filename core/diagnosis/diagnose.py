@@ -246,7 +246,12 @@ def diagnose_cases(
     before = predict_all(indicators_of, tps, base)
     g_before_all = gap(before, data, "all")
     g_before = gap(before, data, "held_out")
-    fitted = fit_each(indicators_of, tps, base, effects, data, jobs=jobs, progress=progress)
+    # the effects that act on the rapids are fitted on the calibration rapids too: an axis
+    # limit fitted on the feed moves alone may slow the rapids where the trace shows none
+    rdata, _ = rapid_data(data)
+    fitted = fit_each(
+        indicators_of, tps, base, effects, data, jobs=jobs, progress=progress, rapids=rdata
+    )
     results = [
         EffectResult(
             name, params, g_before, gap(preds, data, "held_out"), gap(preds, data, "calibration")
@@ -290,7 +295,7 @@ def diagnose_cases(
     on_rapids = False
     if best is None:
         rapid_results, floor_r, named, why = _on_rapids(
-            indicators_of, tps, base, effects, data, before, floor, folded, progress, jobs
+            indicators_of, tps, base, effects, data, rdata, before, floor, folded, progress, jobs
         )
         if named is not None:
             best, on_rapids = named[0], True
@@ -316,6 +321,7 @@ def diagnose_cases(
             stop=STOP_SHARE * g_before,
             progress=progress,
             jobs=jobs,
+            rapids=rdata,
         )
         for name, params, _, _ in added:
             chosen.append(name)
@@ -350,6 +356,7 @@ def _on_rapids(
     base: Setup,
     effects: Mapping[str, Effect],
     data: Sequence[Data],
+    rdata: Sequence[Data],
     before: Sequence[Prediction],
     floor: float,
     folded: frozenset[str],
@@ -369,7 +376,6 @@ def _on_rapids(
     Returns the results ranked, the rapids' floor, (name, parameters, predictions) of the
     named effect or None, and the reason."""
     on = {name: eff for name, eff in effects.items() if eff.rapids}
-    rdata, _ = rapid_data(data)
     if not on or not rdata or not any((~d.calibration).any() for d in rdata):
         return [], math.nan, None, ""
     if progress is not None:
@@ -455,6 +461,7 @@ def add_effects(
     progress: Callable[[str], None] | None = None,
     objective: Objective = FEED,
     jobs: int = 1,
+    rapids: Sequence[Any] = (),
 ) -> tuple[list[tuple[str, dict[str, float], float, float]], Setup, list[Prediction]]:
     """Forward selection on top of ``current`` (whose predictions are ``preds``): every
     effect not yet added is fitted on the calibration data (on ``jobs`` worker processes,
@@ -462,7 +469,8 @@ def add_effects(
     added while it :func:`clears` the test (``share`` of what is left), at most ``most`` of
     them and while the gap is at least ``stop`` (mm/min). Returns (effect, params, gap
     before, gap after) in the order added, the setup and its predictions. The gaps are
-    ``objective``'s (the feed gap, mm/min, unless told)."""
+    ``objective``'s (the feed gap, mm/min, unless told); ``rapids``: more calibration data
+    for the effects that act on the rapids (:func:`core.diagnosis.parallel.fit_each`)."""
     g_now = objective.gap(preds, data, "held_out")
     sq_now = objective.chunks(preds, data)[0]
     added: list[tuple[str, dict[str, float], float, float]] = []
@@ -480,6 +488,7 @@ def add_effects(
             step=COMBINE_STEP,
             start=COMBINE_START,
             done=COMBINE_DONE,
+            rapids=rapids,
         )
         trials = [
             (objective.gap(p, data, "held_out"), name, params, p)

@@ -45,26 +45,35 @@ def fit_each(
     step: str = STEP,
     start: str = START,
     done: str = DONE,
+    rapids: Sequence[Any] = (),
 ) -> dict[str, Fitted]:
     """Every effect of ``effects`` fitted on top of ``base``
     (:func:`core.diagnosis.fit.fit`), on ``jobs`` worker processes where it can (see the
     module docstring): {name: (params, predictions)}, in the order of ``effects``, the same
-    to the bit whatever ``jobs``. ``progress``, if given, is told ``step`` as each fit
+    to the bit whatever ``jobs``. ``rapids``: more data the effects that act on the rapids
+    (``Effect.rapids``) are fitted on besides ``data`` -- the rapids of the runs
+    (:func:`core.diagnosis.resample.rapid_data`), where an axis's or the path's limits show
+    as on the feed moves. ``progress``, if given, is told ``step`` as each fit
     starts (one after the other), or ``start`` once and ``done`` as each fit ends (on
     workers), formatted with the effect's ``name``, ``k`` and ``n`` and the ``workers``."""
     say = progress or (lambda _: None)
     names = list(effects)
+    with_rapids = [*data, *rapids]
+
+    def data_of(name: str) -> Sequence[Any]:
+        return with_rapids if rapids and effects[name].rapids else data
+
     n = len(names)
     workers = workers_for(jobs, n)
     if workers == 1:
         out = {}
         for k, name in enumerate(names, start=1):
             say(step.format(name=name, k=k, n=n))
-            out[name] = fit(indicators_of, tps, base, effects[name], data, objective)
+            out[name] = fit(indicators_of, tps, base, effects[name], data_of(name), objective)
         return out
 
     def one(k: int) -> Fitted:
-        return fit(indicators_of, tps, base, effects[names[k]], data, objective)
+        return fit(indicators_of, tps, base, effects[names[k]], data_of(names[k]), objective)
 
     say(start.format(n=n, workers=workers))
     fitted = forked_map(
