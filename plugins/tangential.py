@@ -464,8 +464,8 @@ def linuxcnc_arc_ratio(tp: ToolPath, k: NDArray[np.int64], machine: Machine, sha
     """The share of the acceleration LinuxCNC 2.9 leaves for speed changes along the arcs
     ``k`` (tc.c ``tcUpdateCircleAccRatio`` when a segment is finalised, blendmath.c
     ``pmCircleActualMaxVel``): 0.5 (BLEND_ACC_RATIO_TANGENTIAL) where the arc's top speed
-    needs more than half its overall acceleration as normal acceleration, else
-    sqrt(1 - (a_n / a)^2).
+    needs more than sqrt(3)/2 (BLEND_ACC_RATIO_NORMAL) of its overall acceleration as normal
+    acceleration, else sqrt(1 - (a_n / a)^2) -- which is 0.5 at that cutoff.
 
     - The top speed and acceleration are canon's (emccanon.cc ``ARC_FEED``): with a_p, v_p
       the lower of the plane's two axes' limits and R_c = sqrt(dr^2 + R^2) (dr the spiral's
@@ -483,10 +483,12 @@ def linuxcnc_arc_ratio(tp: ToolPath, k: NDArray[np.int64], machine: Machine, sha
     - a_n = v^2 / R_e with LinuxCNC's effective radius of a helix,
       R_e = h^2 / R + R (``pmCircleEffectiveMinRadius``, h the WHOLE rise, not per turn):
       three turns of pitch 2 mm round R 3.36 mm have R_e = 36 / 3.36 + 3.36 = 14.07 mm, so
-      at v = 76.6 mm/s a_n = 417 < a_o / 2 = 500: the helix speeds up at
+      at v = 76.6 mm/s a_n = 417 of a_o = 1000: the helix speeds up at
       sqrt(1 - 0.417^2) = 0.909 of a_o, 909 mm/s^2 (drawn9's unchanged thread milling:
-      913); two turns of pitch 1 round R 2.69, R_e = 4.18, a_n = 1116: 0.5, 500 mm/s^2
-      (drawn13's: 500)."""
+      913); two turns of pitch 1 round R 2.69, R_e = 4.18, a_n = 1116 > 866: 0.5, 500
+      mm/s^2 (drawn13's: 500); three turns of pitch 1 round R 2.54, R_e = 6.08, a_n = 727:
+      sqrt(1 - 0.727^2) = 0.69 (drawn16's unchanged thread milling, where a cutoff at
+      a_o / 2 predicted 0.5 and the diagnosis fitted an arc share of 0.66)."""
     nrm = tp.normal[k]
     start, end = tp.start[k], tp.end[k]
     r0 = g.norm(g.radial(start, tp.center[k], nrm))
@@ -515,7 +517,7 @@ def linuxcnc_arc_ratio(tp: ToolPath, k: NDArray[np.int64], machine: Machine, sha
         r_e = rise * rise / r_min + r_min
         a_n = v * v / r_e
         ratio = np.where(
-            a_n > LCNC_TANGENTIAL_RATIO * a_o,
+            a_n > LCNC_NORMAL_RATIO * a_o,
             LCNC_TANGENTIAL_RATIO,
             np.sqrt(np.clip(1.0 - (a_n / a_o) ** 2, 0.0, 1.0)),
         )

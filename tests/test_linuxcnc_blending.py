@@ -472,7 +472,9 @@ M2
 """
 
 
-@pytest.mark.parametrize(("turns", "pitch", "expected"), [(3, 2.0, "sqrt"), (1, 1.0, 0.5)])
+@pytest.mark.parametrize(
+    ("turns", "pitch", "expected"), [(3, 2.0, "sqrt"), (2, 2.0, "sqrt"), (1, 1.0, 0.5)]
+)
 def test_linuxcnc_helix_tangential_share(tmp_path, turns, pitch, expected):
     """LinuxCNC's share of a helix's acceleration for speed changes along it
     (tcUpdateCircleAccRatio, pmCircleActualMaxVel), on the preset's mill (2000 mm/s^2,
@@ -483,7 +485,10 @@ def test_linuxcnc_helix_tangential_share(tmp_path, turns, pitch, expected):
     - 3 turns of pitch 2 (drawn9's thread milling): rise 6, R_e = 14.077, a_n = v^2 / R_e =
       417 < a_o / 2 (502): share sqrt(1 - (a_n / a_o)^2) = 0.910 (the trace: 913 mm/s^2 of the
       1000 the halved acceleration leaves);
-    - one turn of pitch 1: R_e = 3.6566, a_n = 1595 > a_o / 2: 0.5.
+    - two turns of pitch 2: rise 4, R_e = 8.122, a_n = 723, between a_o / 2 and the cutoff
+      sqrt(3)/2 a_o = 870 (blendmath.h BLEND_ACC_RATIO_NORMAL): share
+      sqrt(1 - (723 / 1004.6)^2) = 0.694, not 0.5;
+    - one turn of pitch 1: R_e = 3.6566, a_n = 1595 > sqrt(3)/2 a_o: 0.5.
     The profile's helix acceleration is the lowest axis's over its share times the preset's
     arc factor 0.5, the parabolic 0.5, and the share over 0.5."""
     from core import Ncperf, load_preset
@@ -502,10 +507,12 @@ def test_linuxcnc_helix_tangential_share(tmp_path, turns, pitch, expected):
     a_o = length / (s_len / 2000.0) / 2
     a_n = v * v / (rise * rise / r + r)
     share = math.sqrt(1 - (a_n / a_o) ** 2) if expected == "sqrt" else 0.5
-    if expected == "sqrt":
+    if (turns, pitch) == (3, 2.0):
         assert a_n < a_o / 2 and share == pytest.approx(0.909, abs=0.002)
+    elif expected == "sqrt":
+        assert a_o / 2 < a_n < math.sqrt(3) / 2 * a_o and share == pytest.approx(0.694, abs=0.002)
     else:
-        assert a_n > a_o / 2
+        assert a_n > math.sqrt(3) / 2 * a_o
     k = int(np.flatnonzero(tp.is_arc)[0])
     prof = ncp.predict(tp, setup_for(m, ncp.effects())).profile
     # the helix's tangential acceleration: lowest axis over its shares, the preset's 0.5, the
