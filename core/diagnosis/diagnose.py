@@ -277,14 +277,7 @@ def diagnose_cases(
     stretched = frozenset(
         r.name for r in results if bounded(effects[r.name], r.params, base.machine)
     )
-    # (only those that would be named matter: the others cost no prediction)
-    idle = frozenset(
-        r.name
-        for r in results
-        if r.moved == 0
-        and clears(r.held_out_gap_before, r.held_out_gap_after, r.p, floor, BEST_SHARE)
-        and _changes_nothing(indicators_of, tps, base, effects[r.name], before, data)
-    )
+    idle = _idle(indicators_of, tps, base, effects, results, before, data, floor)
     results, best, reason = decide(results, floor, folded, stretched, idle)
 
     chosen: list[str] = []
@@ -403,13 +396,7 @@ def _on_rapids(
         )
     floor_r, _ = noise_floor(base, rdata)
     contradicted = frozenset(r.name for r in results if r.rapid_gap - g_feed > floor)
-    idle = frozenset(
-        r.name
-        for r in results
-        if r.moved == 0
-        and clears(r.held_out_gap_before, r.held_out_gap_after, r.p, floor_r, BEST_SHARE)
-        and _changes_nothing(indicators_of, tps, base, on[r.name], before, rdata)
-    )
+    idle = _idle(indicators_of, tps, base, on, results, before, rdata, floor_r)
     stretched = frozenset(r.name for r in results if bounded(on[r.name], r.params, base.machine))
     ranked, best, why = decide(
         [r for r in results if r.name not in contradicted], floor_r, folded, stretched, idle
@@ -538,6 +525,28 @@ def _moved(eff: Effect, params: Mapping[str, float], start: Mapping[str, float])
     if not eff.params:
         return 1
     return sum(p.differs(params.get(p.name, 0.0), start.get(p.name, 0.0)) for p in eff.params)
+
+
+def _idle(
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    base: Setup,
+    effects: Mapping[str, Effect],
+    results: Sequence[EffectResult],
+    before: Sequence[Prediction],
+    data: Sequence[Data],
+    floor: float,
+) -> frozenset[str]:
+    """The effects of ``results`` whose fit moved no parameter and which predict at their
+    start what ``base`` does (:func:`_changes_nothing`) -- of those that would clear the
+    test: the others are not named anyway and cost no prediction."""
+    return frozenset(
+        r.name
+        for r in results
+        if r.moved == 0
+        and clears(r.held_out_gap_before, r.held_out_gap_after, r.p, floor, BEST_SHARE)
+        and _changes_nothing(indicators_of, tps, base, effects[r.name], before, data)
+    )
 
 
 def _changes_nothing(
