@@ -119,8 +119,8 @@ def report(
         )
     if rapids:
         lines.append(
-            "                   (rapids: the gap on the rapids, which no fit sees; they decide "
-            "between effects that fit the feed moves alike)"
+            "                   (rapids: the gap on the rapids, which only the effects that act on "
+            "them are fitted on; they decide between effects that fit the feed moves alike)"
         )
     lines.append(
         f"  to be named      an effect must remove at least {BEST_SHARE:.0%} of the held-out "

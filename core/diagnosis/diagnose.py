@@ -23,10 +23,11 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    every parameter at the machine file's value (a block time of 1.00 ms where the file
    says 1.02) is not named, whatever it removes. Among
    the effects that clear it, those not significantly worse than the best, or leaving a gap
-   within TIE_SHARE of its gap, are equally good: the rapids, which no fit sees, drop those
-   they show wrong (a rapid gap over twice the least and the floor); then one the machine
-   file does not set, one whose fit did not run to a bound, the one with the fewest
-   parameters the data moved and the first in EFFECT_PRIORITY are named, in that order.
+   within TIE_SHARE of its gap, are equally good: the rapids (which only the effects that
+   act on them are fitted on, on their calibration half) drop those they show wrong (a
+   rapid gap over twice the least and the floor); then one the machine file does not set,
+   one whose fit did not run to a bound, the one with the fewest parameters the data moved
+   and the first in EFFECT_PRIORITY are named, in that order.
    Where nothing clears the test on the feed moves, the effects that also act on the rapids
    (an axis's speed or acceleration, a path speed cap) are fitted on alternate rapids and
    one is named by the same test on the other rapids, with the rapids' own floor, unless
@@ -119,7 +120,8 @@ class EffectResult:
     p: float = 1.0
     #: squared gap per held-out piece ((mm/min)^2 s), for comparing effects pairwise
     chunk_sq: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
-    #: RMS gap on the rapids (mm/min; NaN: the traces cover none), which no fit sees
+    #: RMS gap on all the rapids (mm/min; NaN: the traces cover none): the effects that act
+    #: on the rapids are fitted on their calibration half, the others on none of them
     rapid_gap: float = math.nan
 
     @property
@@ -651,12 +653,13 @@ def decide(
             and sign_flip_p(r.chunk_sq, lead.chunk_sq) > TIE_P
         )
     ]
-    # The rapids, which no fit saw, decide where they tell effects apart: a path speed limit
-    # or an axis's speed slows the rapids too, a feed override does not (LinuxCNC 2.9 scales
-    # rapids by its rapid override only). They weigh the equals and those a significance
-    # test put behind the best by less than the floor (score6's spiral_pocket_60151: a
-    # 40 mm/s path limit left 6.8 mm/min, an axis-speed fit moving five parameters 6.3 --
-    # not equal by the test --, but 22 against 965 mm/min on the rapids).
+    # The rapids, which most fits do not see, decide where they tell effects apart: a path
+    # speed limit or an axis's speed slows the rapids too, a feed override does not
+    # (LinuxCNC 2.9 scales rapids by its rapid override only). They weigh the equals and
+    # those a significance test put behind the best by less than the floor (score6's
+    # spiral_pocket_60151: a 40 mm/s path limit left 6.8 mm/min, an axis-speed fit moving
+    # five parameters 6.3 -- not equal by the test --, but 22 against 965 mm/min on the
+    # rapids).
     near = [r for r in ok if r.held_out_gap_after - lead.held_out_gap_after < floor]
     pool = equal + [r for r in near if r not in equal]
     by_rapids, slower = equal, []

@@ -61,7 +61,7 @@ class Data:
     #: recent predicted speeds on the selections of this grid (:func:`_speeds`)
     memo: dict = field(default_factory=dict, repr=False)
     #: the measured speed on the rapids the trace covers, on the same kind of grid (arc
-    #: length, speed in mm/s, time weight in s): no fit sees it (:func:`rapid_gap`)
+    #: length, speed in mm/s, time weight in s): :func:`rapid_gap`, :func:`rapid_data`
     rapid_s: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
     rapid_v: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
     rapid_weight: NDArray[np.float64] = field(default_factory=lambda: np.zeros(0), repr=False)
@@ -313,8 +313,9 @@ def gap(preds: Sequence[Prediction], data: Sequence[Data], which: str) -> float:
 
 def rapid_gap(preds: Sequence[Prediction], data: Sequence[Data]) -> float:
     """RMS over time of measured - predicted speed (mm/min) on the rapids of every trace
-    (NaN where the traces cover none). No effect is fitted on them: where effects explain
-    the feed moves equally, the rapids are evidence none of them has seen."""
+    (NaN where the traces cover none). Only the effects that act on the rapids are fitted
+    on them (on their calibration half, :func:`rapid_data`): where effects explain the feed
+    moves equally, the rapids are evidence most of them have not seen."""
     sq, n = 0.0, 0.0
     for d in data:
         if d.rapid_s.size == 0:

@@ -88,11 +88,11 @@ MOST_SHARE = 0.60
 MOST_FLOOR = 0.25
 #: Effects not worse than the best by more than the floor nor significantly (the same test
 #: gives p > TIE_P), or leaving a gap within TIE_SHARE of the best's, explain the data equally
-#: well: the rapids (no fit sees them) drop those that leave a rapid gap over twice the least
-#: and the floor above it; one the machine file does not already set is named before
-#: one it does (its value was calibrated), then one whose fit did not run to a bound (AT_BOUND),
-#: then the one with the fewest parameters the data moved, then the one
-#: first in EFFECT_PRIORITY (what a
+#: well: the rapids (only the effects that act on them are fitted on them) drop those that
+#: leave a rapid gap over twice the least and the floor above it; one the machine file does
+#: not already set is named before one it does (its value was calibrated), then one whose
+#: fit did not run to a bound (AT_BOUND), then the one with the fewest parameters the data
+#: moved, then the one first in EFFECT_PRIORITY (what a
 #: controller more often does, and the simpler story, comes first).
 TIE_P = 0.05
 TIE_SHARE = 0.05
