@@ -264,11 +264,27 @@ def _corner_feed(
 def plane_acceleration(
     t1: NDArray[np.float64], t2: NDArray[np.float64], acc: NDArray
 ) -> tuple[NDArray, NDArray]:
-    """(m,) the acceleration every direction in the plane of t1, t2 allows -- the lowest
-    limit of the axes that plane moves (LinuxCNC's inscribed circle of the axis limits in the
-    blend plane, for axis-aligned planes) -- and (m,) that axis (0, 1, 2)."""
+    """(m,) the acceleration every direction in the plane of t1, t2 allows, and (m,) the axis
+    (0, 1, 2) that sets it: LinuxCNC 2.9's inscribed circle of the axis limits in the blend
+    plane (blendmath.c ``calculateInscribedDiameter``, called with the plane's unit normal
+    n, the binormal): each axis's limit over the length of its unit vector projected onto
+    the plane, A_k / sqrt(1 - n_k^2), the least of the three. In an axis-aligned plane that
+    is the lower limit of the two axes it moves (the third's projection is nil); in a tilted
+    one an axis is met only in part: a corner from (0.93, 0, 0.37) into +Y (n = (-0.37, 0,
+    0.93)) with Z at 870 mm/s^2 and X, Y at 2000 allows min(2000 / 0.93, 2000, 870 / 0.37)
+    = 2000. Where the directions are parallel (no plane) the lowest limit of the axes they
+    move."""
+    acc = np.asarray(acc, dtype=np.float64)
     moved = (np.abs(t1) > TOL.direction) | (np.abs(t2) > TOL.direction)
-    per_axis = np.where(moved, np.asarray(acc)[None, :], np.inf)
+    per_axis = np.where(moved, acc[None, :], np.inf)
+    n = np.cross(t1, t2)
+    size = np.linalg.norm(n, axis=1)
+    plane = size > TOL.direction
+    with np.errstate(divide="ignore", invalid="ignore"):
+        unit = n / size[:, None]
+        scale = np.sqrt(np.clip(1.0 - unit * unit, 0.0, 1.0))
+        inscribed = acc[None, :] / np.maximum(scale, TOL.direction)
+    per_axis = np.where(plane[:, None], inscribed, per_axis)
     axis = per_axis.argmin(axis=1)
     return per_axis[np.arange(axis.size), axis], axis
 

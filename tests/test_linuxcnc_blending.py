@@ -528,3 +528,29 @@ def test_linuxcnc_helix_tangential_share(tmp_path, turns, pitch, expected):
     capped = dataclasses.replace(m, max_path_feed=40.0)
     prof40 = ncp.predict(tp, setup_for(capped, ncp.effects())).profile
     assert prof40.a_up[k] == pytest.approx(a_axes * 0.5 * 0.5 * share / 0.5, rel=1e-3)
+
+
+def test_the_blend_plane_acceleration_is_the_inscribed_circle_of_the_axis_limits():
+    """LinuxCNC 2.9's acceleration in a blend's plane (blendmath.c
+    calculateInscribedDiameter with the plane's unit normal n): min over the axes of
+    A_k / sqrt(1 - n_k^2), the length of the axis's unit vector projected onto the plane.
+    X, Y 2000 and Z 870 mm/s^2:
+    - a dome's raster corner, (0.928, 0, 0.371) into +Y: n = (-0.371, 0, 0.928), X 2000 /
+      0.928 = 2154, Y 2000 / 1, Z 870 / 0.371 = 2345: 2000 (Y), though the plane moves Z;
+    - (1, 0, 0) into (0, 0.6, 0.8): n = (0, -0.8, 0.6), X 2000, Y 2000 / 0.6 = 3333, Z
+      870 / 0.8 = 1087.5 (Z);
+    - an axis-aligned plane, +X into +Y: n = +Z, Z's projection nil: min(X, Y) = 2000 (X);
+    - parallel directions (no plane): the lowest limit of the axes moved."""
+    from plugins.tangential import plane_acceleration
+
+    acc = np.array([2000.0, 2000.0, 870.0])
+    u = np.array([0.928, 0.0, 0.371])
+    u = u / np.linalg.norm(u)
+    t1 = np.array([u, [1.0, 0.0, 0.0], [1.0, 0.0, 0.0], [0.6, 0.0, 0.8]])
+    t2 = np.array([[0.0, 1.0, 0.0], [0.0, 0.6, 0.8], [0.0, 1.0, 0.0], [0.6, 0.0, 0.8]])
+    a, axis = plane_acceleration(t1, t2, acc)
+    n0 = np.cross(u, [0.0, 1.0, 0.0])
+    expected0 = min(2000.0 / math.sqrt(1 - n0[0] ** 2), 2000.0, 870.0 / math.sqrt(1 - n0[2] ** 2))
+    assert expected0 == pytest.approx(2000.0)
+    assert a == pytest.approx([expected0, 1087.5, 2000.0, 870.0], rel=1e-12)
+    assert axis.tolist() == [1, 2, 0, 2]
