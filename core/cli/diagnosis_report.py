@@ -7,9 +7,9 @@ Gaps in mm/min, times in s; the thresholds quoted come from :mod:`core.diagnosis
 from __future__ import annotations
 
 import math
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 
-from core.diagnosis.diagnose import Diagnosis
+from core.diagnosis.diagnose import Diagnosis, EffectResult
 from core.diagnosis.fit import bounded
 from core.diagnosis.gaps import GapZone
 from core.diagnosis.rules import ADD_SHARE, BEST_SHARE, GAP_SHARE, SIG_P, STOP_SHARE
@@ -103,20 +103,8 @@ def report(
     lines.append(
         "  effects          fitted on the calibration data; gap on the held-out data (mm/min):"
     )
-    params = [_fmt_params(r.params, effects[r.name]) for r in d.effects]
-    width = max([len("parameters"), *map(len, params)])
     rapids = any(math.isfinite(r.rapid_gap) for r in d.effects)
-    lines.append(
-        f"    {'#':>2s}  {'effect':28s} {'parameters':{width}s} {'before':>8s} "
-        f"{'after':>8s} {'removed':>8s}" + (f" {'rapids':>8s}" if rapids else "")
-    )
-    for k, (r, ps) in enumerate(zip(d.effects, params, strict=True), start=1):
-        lines.append(
-            f"    {k:2d}  {r.name:28s} {ps:{width}s} "
-            f"{r.held_out_gap_before:8.1f} {r.held_out_gap_after:8.1f} "
-            f"{r.removed * 100:7.0f}%"
-            + (f" {r.rapid_gap:8.1f}" if rapids and math.isfinite(r.rapid_gap) else "")
-        )
+    lines += _effect_table(d.effects, effects, ".1f", "rapids" if rapids else "")
     if rapids:
         lines.append(
             "                   (rapids: the gap on the rapids, which only the effects that act on "
@@ -136,17 +124,7 @@ def report(
             "                   fitted on alternate rapids; gap on the other rapids (mm/min), "
             "and on the held-out feed moves:"
         )
-        rp = [_fmt_params(r.params, effects[r.name]) for r in d.rapid_effects]
-        wid = max([len("parameters"), *map(len, rp)])
-        lines.append(
-            f"    {'#':>2s}  {'effect':28s} {'parameters':{wid}s} {'before':>8s} "
-            f"{'after':>8s} {'removed':>8s} {'feed':>8s}"
-        )
-        for k, (r, ps) in enumerate(zip(d.rapid_effects, rp, strict=True), start=1):
-            lines.append(
-                f"    {k:2d}  {r.name:28s} {ps:{wid}s} {r.held_out_gap_before:8.0f} "
-                f"{r.held_out_gap_after:8.0f} {r.removed * 100:7.0f}% {r.rapid_gap:8.1f}"
-            )
+        lines += _effect_table(d.rapid_effects, effects, ".0f", "feed")
         lines.append(
             f"                   (the same test, the rapids' floor {d.rapid_floor:.0f} mm/min; "
             "and the held-out feed moves' gap no worse than the floor)"
@@ -175,6 +153,28 @@ def report(
     for k, w in enumerate(warnings(d, effects, labels)):
         lines.append(f"  {'WARNING' if k == 0 else '':16s} {w}")
     return "\n".join(lines)
+
+
+def _effect_table(
+    results: Sequence[EffectResult], effects: Mapping[str, Effect], fmt: str, last: str
+) -> list[str]:
+    """The rows of an effects table: number, effect, fitted parameters, held-out gap before
+    and after (format ``fmt``), the share removed, and, titled ``last`` (none if ""), the
+    gap each leaves on the data beside (``rapid_gap``; blank where NaN)."""
+    params = [_fmt_params(r.params, effects[r.name]) for r in results]
+    width = max([len("parameters"), *map(len, params)])
+    rows = [
+        f"    {'#':>2s}  {'effect':28s} {'parameters':{width}s} {'before':>8s} "
+        f"{'after':>8s} {'removed':>8s}" + (f" {last:>8s}" if last else "")
+    ]
+    for k, (r, ps) in enumerate(zip(results, params, strict=True), start=1):
+        rows.append(
+            f"    {k:2d}  {r.name:28s} {ps:{width}s} "
+            f"{r.held_out_gap_before:8{fmt}} {r.held_out_gap_after:8{fmt}} "
+            f"{r.removed * 100:7.0f}%"
+            + (f" {r.rapid_gap:8.1f}" if last and math.isfinite(r.rapid_gap) else "")
+        )
+    return rows
 
 
 def _zone_table(title: str, zones: tuple[GapZone, ...]) -> list[str]:

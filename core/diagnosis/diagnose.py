@@ -40,7 +40,6 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
 
 from __future__ import annotations
 
-import dataclasses
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass, field
@@ -254,20 +253,9 @@ def diagnose_cases(
     fitted = fit_each(
         indicators_of, tps, base, effects, data, jobs=jobs, progress=progress, rapids=rdata
     )
-    results = [
-        EffectResult(
-            name, params, g_before, gap(preds, data, "held_out"), gap(preds, data, "calibration")
-        )
-        for name, (params, preds) in fitted.items()
-    ]
-    sq_before, _ = held_out_chunks(before, data)
-    for k, r in enumerate(results):
-        sq_after, _ = held_out_chunks(fitted[r.name][1], data)
-        moved = _moved(effects[r.name], r.params, effects[r.name].start(base.machine))
-        p = sign_flip_p(sq_before, sq_after)
-        results[k] = dataclasses.replace(
-            r, moved=moved, p=p, chunk_sq=sq_after, rapid_gap=rapid_gap(fitted[r.name][1], data)
-        )
+    results = _evidence(
+        effects, base, fitted, before, g_before, data, lambda preds: rapid_gap(preds, data)
+    )
     floor, floor_source = noise_floor(base, data)
     # effects whose values the machine file sets (absolute, not a further factor on top)
     folded = frozenset(
@@ -375,27 +363,18 @@ def _on_rapids(
         return [], math.nan, None, ""
     if progress is not None:
         progress("the feed moves show no effect: fitting the axes' limits on the rapids")
-    r_before = gap(before, rdata, "held_out")
-    sq_before, _ = held_out_chunks(before, rdata)
     g_feed = gap(before, data, "held_out")
     fitted = fit_each(indicators_of, tps, base, on, rdata, jobs=jobs, progress=progress)
-    results = []
-    for name, (params, preds) in fitted.items():
-        sq_after, _ = held_out_chunks(preds, rdata)
-        results.append(
-            EffectResult(
-                name,
-                params,
-                r_before,
-                gap(preds, rdata, "held_out"),
-                gap(preds, rdata, "calibration"),
-                moved=_moved(on[name], params, on[name].start(base.machine)),
-                p=sign_flip_p(sq_before, sq_after),
-                chunk_sq=sq_after,
-                # (here: the feed moves' held-out gap, which this fit did not see)
-                rapid_gap=gap(preds, data, "held_out"),
-            )
-        )
+    # (``rapid_gap`` here: the feed moves' held-out gap, which these fits did not see)
+    results = _evidence(
+        on,
+        base,
+        fitted,
+        before,
+        gap(before, rdata, "held_out"),
+        rdata,
+        lambda preds: gap(preds, data, "held_out"),
+    )
     floor_r, _ = noise_floor(base, rdata)
     contradicted = frozenset(r.name for r in results if r.rapid_gap - g_feed > floor)
     idle = _idle(indicators_of, tps, base, on, results, before, rdata, floor_r)
@@ -527,6 +506,40 @@ def _moved(eff: Effect, params: Mapping[str, float], start: Mapping[str, float])
     if not eff.params:
         return 1
     return sum(p.differs(params.get(p.name, 0.0), start.get(p.name, 0.0)) for p in eff.params)
+
+
+def _evidence(
+    effects: Mapping[str, Effect],
+    base: Setup,
+    fitted: Mapping[str, tuple[dict[str, float], list[Prediction]]],
+    before: Sequence[Prediction],
+    g_before: float,
+    data: Sequence[Data],
+    unseen: Callable[[list[Prediction]], float],
+) -> list[EffectResult]:
+    """Every fitted effect's evidence on ``data`` (whose held-out gap before is
+    ``g_before``): its held-out and calibration gaps, the parameters it moved, the p value
+    of its held-out reduction against ``before`` and its squared gap per held-out piece,
+    and, as ``rapid_gap``, ``unseen`` of its predictions: its gap on what the decision
+    weighs beside -- the rapids on the feed moves, the feed moves on the rapids."""
+    sq_before, _ = held_out_chunks(before, data)
+    out = []
+    for name, (params, preds) in fitted.items():
+        sq_after, _ = held_out_chunks(preds, data)
+        out.append(
+            EffectResult(
+                name,
+                params,
+                g_before,
+                gap(preds, data, "held_out"),
+                gap(preds, data, "calibration"),
+                moved=_moved(effects[name], params, effects[name].start(base.machine)),
+                p=sign_flip_p(sq_before, sq_after),
+                chunk_sq=sq_after,
+                rapid_gap=unseen(preds),
+            )
+        )
+    return out
 
 
 def _idle(
