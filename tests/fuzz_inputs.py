@@ -1169,7 +1169,7 @@ _TOML_TABLES = (
     "[axes.C]\nmax_feed = {v}\nmax_acceleration = {v}\n",
     "[offsets]\nG54 = [{v}, {v}, {v}]\nG59.3 = [0, 0, {v}]\n",
     "[tools]\nT1 = {{ diameter = {v}, length = {v} }}\nT{n} = {{ radius = {v} }}\n",
-    "[diagnosis]\nnoise_floor = {v}\n",
+    "[diagnosis]\nnoise_floor = {v}\ntrace_cycle = {v}\n",
     "[effects.{e}]\n{p} = {v}\n",
     "[effects.{e}]\n{p} = {v}\n",
     "[effects.{e}]\n{p} = {v}\n",

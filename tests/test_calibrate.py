@@ -119,6 +119,7 @@ def test_calibrate_command(tmp_path, capsys):
         )
         + "[controller]\ninterpolation_time = 0.012\npath_tolerance = 0.01\n"
         + "curvature_transition_time = 0.012\n"
+        + "[diagnosis]\ntrace_cycle = 0.001\n"
     )
     start_file = tmp_path / "start.toml"
     start_file.write_text(start_text)
@@ -172,6 +173,7 @@ def test_calibrate_command(tmp_path, capsys):
     line = next(x for x in text.splitlines() if x.startswith("interpolation_time"))
     assert "fitted range" in line and "folds" in line
     assert tomllib.loads(text)["diagnosis"]["noise_floor"] >= 0
+    assert m.trace_cycle == 0.001  # the start file's other [diagnosis] keys stay
     assert "other programs" in capsys.readouterr().out
     bad = main(["calibrate", *args[:2], "--also", args[0], "--out", str(tmp_path / "x.toml")])
     assert bad == 2

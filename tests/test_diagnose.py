@@ -894,3 +894,95 @@ def test_rapids_as_the_machine_file_says_name_nothing(nc):
     d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", nc.effects())
     assert d.best_effect is None and d.chosen == () and not d.on_rapids
     assert {r.name for r in d.rapid_effects} == {"axis_dynamics", "path_feed_limit"}
+
+
+def clocked_trace(nc, tp, setup, period):
+    """The motion of ``setup``'s prediction sampled every ``period`` s, times written to the
+    microsecond (as the LinuxCNC harness writes them)."""
+    smp = nc.predict(tp, setup).profile.sample(period)
+    t = np.round(smp.t - smp.t[0], 6)
+    return Trace(
+        t=t, pos=tp.point_at(smp.s), v=smp.v, line=tp.line[tp.move_at(smp.s)], source="clocked"
+    )
+
+
+def test_the_sample_period_of_regular_traces():
+    """A regular trace's period; NaN where the samples are irregular (one step in fifty off
+    by 0.4 ms), or where two traces sample at different periods."""
+    from core.diagnosis.diagnose import sample_cycle
+
+    t = np.round(np.arange(2000) * 0.0015, 6)
+    assert sample_cycle([t]) == pytest.approx(0.0015, abs=1e-9)
+    assert sample_cycle([t, t[:500]]) == pytest.approx(0.0015, abs=1e-9)
+    jitter = t + np.where(np.arange(2000) % 50 == 7, 0.0004, 0.0)
+    assert math.isnan(sample_cycle([jitter]))
+    assert math.isnan(sample_cycle([t, np.arange(2000) * 0.001]))
+    assert math.isnan(sample_cycle([t[:2]]))
+
+
+def _clock_machine(**kw):
+    """A LinuxCNC-like machine: blocks of at least 1.02 ms, traces sampled once per 1 ms
+    cycle (``[diagnosis] trace_cycle``)."""
+    return dataclasses.replace(machine(jerk=(INF, INF, INF), t_int=0.00102), **kw)
+
+
+def test_a_controller_cycle_is_read_off_the_sample_clock(nc):
+    """The zigzag (0.8 mm blocks at F100 mm/s) on a machine whose traces sample once per
+    1 ms cycle, recorded every 3 ms: the controller ran a 3 ms cycle, blocks of at least
+    1.02 x 3 = 3.06 ms. Its 0.8 mm blocks may run at 0.8 / 0.00306 = 261 mm/s, above F: the
+    motion is the machine file's, no fit can see the cycle, and block_cycle_time is named
+    from the clock with t_block = 3.06 ms, not fitted. The report and the JSON say so."""
+    tp = zigzag()
+    m = _clock_machine(trace_cycle=0.001)
+    effects = nc.effects()
+    base = Setup(machine=m)
+    truth = effects["block_cycle_time"].apply(base, {"t_block": 0.00306})
+    tr = clocked_trace(nc, tp, truth, 0.003)
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", effects)
+    assert d.sample_cycle == pytest.approx(0.003, abs=1e-9)
+    assert d.best_effect == "block_cycle_time" and d.on_clock
+    assert d.chosen[0] == "block_cycle_time"
+    assert d.chosen_params["block_cycle_time"]["t_block"] == pytest.approx(0.00306, rel=1e-6)
+    assert d.clock is not None
+    assert d.clock.held_out_gap_after <= d.clock.held_out_gap_before + d.floor
+    assert "from the sample clock" in d.reason
+    # on the feed moves alone nothing clears the floor: the motion is the machine file's
+    assert all(r.held_out_gap_before - r.held_out_gap_after < d.floor for r in d.effects)
+    from core.cli.diagnosis_report import report, to_json
+
+    text = report(d, program="zigzag", machine="test", labels=["t"], effects=effects)
+    assert "sample clock     every 3 ms, not the machine file's cycle" in text
+    assert "t_block = 0.00306" in text
+    js = json.loads(json.dumps(to_json(d, m, effects)))
+    assert js["decision"]["on"] == "sample clock"
+    assert js["sample_clock"]["params"]["t_block"] == pytest.approx(0.00306, rel=1e-6)
+    assert js["sample_clock"]["named"] is True
+
+
+def test_a_cycle_the_feed_moves_contradict_is_not_named(nc):
+    """0.2 mm blocks at F100 mm/s, run as the machine file says (blocks of 1.02 ms: a cap of
+    0.2 / 0.00102 = 196 mm/s, above F) but recorded every 3 ms. A 3 ms cycle would hold
+    them to 0.2 / 0.00306 = 65 mm/s, where the trace runs at 100: the clock's block time
+    makes the held-out gap worse by some 35 mm/s (2100 mm/min), far beyond the floor, and
+    is not named (a trace decimated to every third sample, say)."""
+    tp = path([{"end": (0.2 * (i + 1), 0, 0)} for i in range(400)], feed=100.0)
+    base = Setup(machine=_clock_machine(trace_cycle=0.001))
+    tr = clocked_trace(nc, tp, base, 0.003)
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", nc.effects())
+    assert d.clock is not None and not d.on_clock
+    assert d.clock.held_out_gap_after - d.clock.held_out_gap_before > 1000.0
+    assert d.best_effect != "block_cycle_time"
+    assert "not named" in d.reason
+
+
+@pytest.mark.parametrize("cycle,period", [(math.nan, 0.003), (0.001, 0.001), (0.003, 0.003)])
+def test_the_clock_says_nothing_where_it_agrees_or_the_machine_gives_none(nc, cycle, period):
+    """The zigzag as the machine file says, recorded every ``period`` s: a machine whose
+    file does not say its traces sample its cycle (NaN), or whose cycle the samples match,
+    names nothing."""
+    tp = zigzag()
+    base = Setup(machine=_clock_machine(trace_cycle=cycle))
+    tr = clocked_trace(nc, tp, base, period)
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], base, "profile", nc.effects())
+    assert d.clock is None and not d.on_clock
+    assert d.best_effect is None and d.chosen == ()

@@ -19,6 +19,8 @@ import numpy as np
 import pytest
 
 from core import Ncperf, load_preset
+from core.diagnosis.align import align
+from core.diagnosis.diagnose import sample_cycle
 from core.engine.effects import setup_for
 
 ROOT = Path(__file__).resolve().parents[1]
@@ -63,6 +65,10 @@ M2
 """
 
 
+#: one more square of SQUARES (from its start corner, X0 Y0)
+_SQUARE = ("G1 X2\n", "G1 Y2\n", "G1 X0\n", "G1 Y0\n")
+
+
 def record(tmp: Path, name: str, text: str, servo_ns: int | None = None) -> dict:
     prog = tmp / f"{name}.ngc"
     prog.write_text(text)
@@ -73,7 +79,7 @@ def record(tmp: Path, name: str, text: str, servo_ns: int | None = None) -> dict
     r = subprocess.run(cmd, capture_output=True, text=True, timeout=300)
     assert r.returncode == 0, r.stderr[-2000:]
     data = np.genfromtxt(out, delimiter=",", names=True)
-    return {"prog": prog, "t": data["t"], "line": data["line"].astype(int)}
+    return {"prog": prog, "csv": out, "t": data["t"], "line": data["line"].astype(int)}
 
 
 def line_time(t: np.ndarray, line: np.ndarray, k: int) -> float:
@@ -98,6 +104,8 @@ def test_a_line_into_a_helix_and_out_of_it(tmp_path):
     prof = predicted(tr["prog"])
     measured = float(tr["t"][-1] - tr["t"][0])
     assert prof.cycle_time == pytest.approx(measured, rel=0.01)
+    # one row per servo period of 1 ms, as linuxcnc-sim's [diagnosis] trace_cycle says
+    assert sample_cycle([tr["t"]]) == pytest.approx(0.001, abs=1e-9)
     s = prof.sample(0.001)
     for k in THREAD_LINES:
         expected = line_time(tr["t"], tr["line"], k)
@@ -145,3 +153,24 @@ def test_nearly_collinear_blocks_run_as_the_segments_linuxcnc_makes(tmp_path):
     prof = predicted(tr["prog"])
     measured = float(tr["t"][-1] - tr["t"][0])
     assert prof.cycle_time == pytest.approx(measured, rel=0.005)
+
+
+def test_a_servo_period_is_read_off_the_traces_clock(tmp_path):
+    """Twelve 2 mm squares at F1200 recorded with a 3 ms servo period: LinuxCNC's sampler
+    writes one row per servo period, 3 ms apart, where linuxcnc-sim's traces sample its
+    1 ms period. The diagnosis names block_cycle_time from the clock, t_block = 1.02 x 3 =
+    3.06 ms, and the feed moves do not contradict it: its held-out gap is no worse than the
+    machine file's by more than the floor."""
+    text = SQUARES.replace("G0 Z5", "".join(_SQUARE * 10) + "G0 Z5")
+    tr = record(tmp_path, "squares3", text, servo_ns=3_000_000)
+    assert sample_cycle([tr["t"]]) == pytest.approx(0.003, abs=1e-9)
+    nc = Ncperf()
+    tp = nc.extract(str(tr["prog"]))
+    effects = nc.effects()
+    base = setup_for(load_preset("linuxcnc-sim"), effects)
+    trace = nc.read_trace(str(tr["csv"]))
+    d = nc.diagnose([(tp, [align(tp, trace)], ["t"])], base, "profile", effects)
+    assert d.on_clock and d.chosen[0] == "block_cycle_time"
+    assert d.chosen_params["block_cycle_time"]["t_block"] == pytest.approx(0.00306, rel=1e-6)
+    assert d.clock is not None
+    assert d.clock.held_out_gap_after <= d.clock.held_out_gap_before + d.floor

@@ -117,6 +117,22 @@ def test_presets_load_and_the_840d_keeps_the_papers_t_int():
     # whose axes would allow 250 / 0.8 = 312.5 mm/s, runs at 250
     assert lc.max_path_feed == pytest.approx(250.0)
     assert lc.rapid_speed(np.array([[0.6, 0.8, 0.0]]))[0] == pytest.approx(250.0)
+    # the harness samples once per servo period, SERVO_PERIOD = 1000000 ns; the 840D's
+    # file does not say how its traces are sampled
+    assert lc.trace_cycle == 0.001 and math.isnan(m.trace_cycle)
+
+
+def test_the_trace_cycle_of_a_machine_file(tmp_path):
+    """``[diagnosis] trace_cycle`` (s) loads as given; zero or negative is an error naming
+    file and line."""
+    m = load_machine_file(write(tmp_path, GOOD + "[diagnosis]\ntrace_cycle = 0.002\n"))
+    assert m.trace_cycle == 0.002
+    p = write(tmp_path, GOOD + "[diagnosis]\ntrace_cycle = 0\n")
+    with pytest.raises(MachineError) as info:
+        load_machine_file(p)
+    n = (GOOD + "[diagnosis]\n").count("\n") + 1
+    assert str(info.value).startswith(f"{p}:{n}:")
+    assert "'trace_cycle' in [diagnosis] must be a positive number" in str(info.value)
 
 
 def test_840d_preset_marks_its_assumptions():

@@ -152,7 +152,8 @@ def machine_toml(
             for pname in values:
                 comments[(("effects", c.name), pname)] = "calibrated: " + _rng(c, pname)
     if cal.objective.name == "feed":
-        data["diagnosis"] = {"noise_floor": round(cal.noise_floor, 3)}
+        # (the start file's other [diagnosis] keys, such as trace_cycle, stay)
+        data.setdefault("diagnosis", {})["noise_floor"] = round(cal.noise_floor, 3)
         comments[(("diagnosis",), "noise_floor")] = (
             "mm/min: the held-out gap this file leaves (ncperf diagnose's floor)"
         )

@@ -129,6 +129,15 @@ def report(
             f"                   (the same test, the rapids' floor {d.rapid_floor:.0f} mm/min; "
             "and the held-out feed moves' gap no worse than the floor)"
         )
+    if d.clock is not None:
+        c = d.clock
+        lines.append(
+            f"  sample clock     every {d.sample_cycle * 1e3:.4g} ms, not the machine file's "
+            f"cycle: {c.name} {_fmt_params(c.params, effects[c.name])} (read, not fitted); "
+            f"held-out gap "
+            f"{c.held_out_gap_before:.1f} -> {c.held_out_gap_after:.1f} mm/min"
+            + ("" if d.on_clock else ": contradicted by the feed moves, not named")
+        )
     if d.best_effect is None:
         lines.append(
             f"  best effect      {d.reason} (what is left is noise, or an effect not in this list)"
@@ -137,6 +146,12 @@ def report(
         lines.append(f"  best effect      {d.reason}")
         if d.on_rapids:
             lines.append(f"  chosen           {' + '.join(d.chosen)} (found on the rapids)")
+        elif d.on_clock:
+            lines.append(
+                f"  chosen           {' + '.join(d.chosen)} (the first read off the sample "
+                f"clock; each further one removing at least {ADD_SHARE:.0%} of what was left "
+                f"on held-out data, until less than {STOP_SHARE:.0%} of the gap was left)"
+            )
         else:
             lines.append(
                 f"  chosen           {' + '.join(d.chosen)} (each removing at least "
@@ -192,6 +207,23 @@ def _zone_table(title: str, zones: tuple[GapZone, ...]) -> list[str]:
             f"{z.gap_rms:8.0f} mm/min {z.time_s:+8.3f} s"
         )
     return out
+
+
+def _clock_json(d: Diagnosis) -> dict | None:
+    """The cycle read off the sample clock (None where the traces' clock says nothing)."""
+    c = d.clock
+    if c is None:
+        return None
+    return {
+        "sample_period_s": round(d.sample_cycle, 9),
+        "machine_trace_cycle_s": d.before.setup.machine.trace_cycle,
+        "effect": c.name,
+        "params": {k: round(v, 9) for k, v in c.params.items()},
+        "held_out_gap_before": round(c.held_out_gap_before, 3),
+        "held_out_gap_after": round(c.held_out_gap_after, 3),
+        "p": round(c.p, 5),
+        "named": d.on_clock,
+    }
 
 
 def to_json(
@@ -252,8 +284,9 @@ def to_json(
             for r in d.rapid_effects
         ],
         "best_effect": d.best_effect,
+        "sample_clock": _clock_json(d),
         "decision": {
-            "on": "rapids" if d.on_rapids else "feed moves",
+            "on": "sample clock" if d.on_clock else "rapids" if d.on_rapids else "feed moves",
             "rapid_floor_mm_min": (
                 round(d.rapid_floor, 3) if math.isfinite(d.rapid_floor) else None
             ),

@@ -126,6 +126,17 @@ MAX_CHOSEN = 4
 #: the same data always gets the same answer.
 SIGN_FLIPS = 20_000
 
+# ---------------------------------------------------------------- the sample clock
+#: A machine whose traces sample once per controller cycle (``[diagnosis] trace_cycle`` in
+#: its file: LinuxCNC's sampler runs on the servo thread, one row per servo period) tells
+#: its cycle in every trace: a trace whose samples come every T s ran with a cycle of T
+#: (:func:`core.diagnosis.diagnose.sample_cycle`). The samples are regular when at least
+#: CLOCK_REGULAR of the steps lie within CLOCK_JITTER (s; the harness writes times to the
+#: microsecond) of their median; a cycle differs from the file's beyond CLOCK_SHARE of it.
+CLOCK_REGULAR = 0.99
+CLOCK_JITTER = 2e-6
+CLOCK_SHARE = 0.01
+
 # ---------------------------------------------------------------- calibrating on block times
 #: ``ncperf calibrate --objective auto`` fits the time between observed line changes
 #: (:mod:`core.diagnosis.blocktime`) instead of the feed gap when every trace carries program

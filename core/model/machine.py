@@ -34,6 +34,12 @@ Optional, for the readers (:mod:`core.model.setup`) and rotary axes::
     G54 = [100.0, 50.0, -200.0]        # mm, machine coordinates of the work origin
     [tools]
     T1 = { diameter = 10.0, length = 50.0 }   # mm
+
+Optional, for ``ncperf diagnose`` (:mod:`core.diagnosis`)::
+
+    [diagnosis]
+    noise_floor = 12.0                 # mm/min, the held-out gap (ncperf calibrate writes it)
+    trace_cycle = 0.001                # s, the controller cycle its traces sample once per
 """
 
 from __future__ import annotations
@@ -156,6 +162,11 @@ class Machine:
     #: fitted on: the noise floor of the diagnosis (``[diagnosis] noise_floor`` in mm/min,
     #: written by ``ncperf calibrate``); NaN: none given (estimated from each trace).
     noise_floor: float = math.nan
+    #: The controller cycle (s) this machine's traces are sampled at, once per cycle
+    #: (``[diagnosis] trace_cycle``; LinuxCNC's sampler on the servo thread: its servo
+    #: period); NaN: its traces are sampled otherwise. A trace sampled every T s then ran with
+    #: a cycle of T, and the diagnosis compares the two (core.diagnosis.diagnose).
+    trace_cycle: float = math.nan
     #: Rotary axes the file describes ("A", "B", "C").
     rotary: dict[str, RotaryAxis] = field(default_factory=dict)
     #: What the controller holds before a program runs (home, offsets, tools...).
@@ -414,9 +425,12 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         raise MachineError(
             "'diagnosis' must be a table", source=source, line=_line_of(text, "diagnosis")
         )
-    _check_keys(diag, (), "diagnosis", source, text, ("noise_floor",))
+    _check_keys(diag, (), "diagnosis", source, text, ("noise_floor", "trace_cycle"))
     if "noise_floor" in diag:
         noise_floor = _number(diag["noise_floor"], "noise_floor", "diagnosis", source, text) / 60.0
+    trace_cycle = math.nan
+    if "trace_cycle" in diag:
+        trace_cycle = _number(diag["trace_cycle"], "trace_cycle", "diagnosis", source, text)
     setup = _setup(ctrl, data.get("offsets", {}), data.get("tools", {}), source, text)
     return Machine(
         rotary=rotary,
@@ -425,6 +439,7 @@ def machine_from_toml_text(text: str, source: str) -> Machine:
         block_time_on_blends=planner.get("block_time_on_blends", False),
         corner_blending=planner.get("corner_blending", "paper"),
         noise_floor=noise_floor,
+        trace_cycle=trace_cycle,
         name=name.strip(),
         max_feed=np.array(per_axis["max_feed"]),
         max_acceleration=np.array(per_axis["max_acceleration"]),
