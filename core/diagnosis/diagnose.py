@@ -296,31 +296,14 @@ def diagnose_cases(
     floor_r = math.nan
     on_rapids = False
     on_clock = clock is not None and clock_preds is not None
+    # the first effect named, where the others are fitted on top of it: its parameters, its
+    # predictions and the others in the order they are tried
+    first: tuple[dict[str, float], list[Prediction], dict[str, Effect]] | None = None
     if clock is not None and clock_preds is not None:
-        # a cycle read off the trace's clock comes first; the effects are fitted on top
+        # a cycle read off the trace's clock comes first
         best = clock.name
         reason = f"{clock_why}; on the feed moves alone, {reason.removeprefix('none: ')}"
-        chosen.append(best)
-        chosen_params[best] = clock.params
-        others = {name: eff for name, eff in effects.items() if name != best}
-        added, _, current_preds = add_effects(
-            indicators_of,
-            tps,
-            effects[best].apply(base, clock.params),
-            clock_preds,
-            others,
-            data,
-            floor,
-            share=ADD_SHARE,
-            most=MAX_CHOSEN - 1,
-            stop=STOP_SHARE * g_before,
-            progress=progress,
-            jobs=jobs,
-            rapids=rdata,
-        )
-        for name, params, _, _ in added:
-            chosen.append(name)
-            chosen_params[name] = params
+        first = (clock.params, clock_preds, {n: e for n, e in effects.items() if n != best})
     elif best is None:
         rapid_results, floor_r, named, why = _on_rapids(
             indicators_of, tps, base, effects, data, rdata, before, floor, folded, progress, jobs
@@ -336,15 +319,17 @@ def diagnose_cases(
     else:
         if clock_why:
             reason = f"{reason}; {clock_why}"
-        chosen.append(best)
-        chosen_params[best] = fitted[best][0]
-        current = effects[best].apply(base, fitted[best][0])
         others = {r.name: effects[r.name] for r in results if r.name != best}
+        first = (fitted[best][0], fitted[best][1], others)
+    if first is not None and best is not None:
+        params, preds, others = first
+        chosen.append(best)
+        chosen_params[best] = params
         added, _, current_preds = add_effects(
             indicators_of,
             tps,
-            current,
-            fitted[best][1],
+            effects[best].apply(base, params),
+            preds,
             others,
             data,
             floor,
@@ -355,9 +340,9 @@ def diagnose_cases(
             jobs=jobs,
             rapids=rdata,
         )
-        for name, params, _, _ in added:
+        for name, p, _, _ in added:
             chosen.append(name)
-            chosen_params[name] = params
+            chosen_params[name] = p
     return Diagnosis(
         baseline=baseline,
         held_out=held_out,
