@@ -975,6 +975,34 @@ def test_a_cycle_the_feed_moves_contradict_is_not_named(nc):
     assert "not named" in d.reason
 
 
+def test_a_block_time_the_clock_contradicts_is_not_named(nc):
+    """The zigzag on a controller whose blocks take 30 ms, recorded every 1 ms: without
+    ``trace_cycle`` the fit finds t_block = 30 ms and names it (as in
+    test_a_known_effect_is_named_first). With ``trace_cycle = 0.001`` the clock says the
+    cycle is the machine file's 1 ms, so its block time is the file's 1.02 ms: the fitted
+    block time is shown, last in the table, and not named (what the trace shows is then
+    explained by something else or by nothing)."""
+    tp = zigzag()
+    effects = nc.effects()
+    m = _clock_machine(trace_cycle=0.001)
+    truth = effects["block_cycle_time"].apply(Setup(machine=m), {"t_block": 0.03})
+    tr = clocked_trace(nc, tp, truth, 0.001)
+    free = Setup(machine=dataclasses.replace(m, trace_cycle=math.nan))
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], free, "profile", effects)
+    assert d.best_effect == "block_cycle_time" and not d.clock_agrees
+    d = nc.diagnose([(tp, [align(tp, tr)], ["t"])], Setup(machine=m), "profile", effects)
+    assert d.clock_agrees and d.clock is None
+    assert d.best_effect != "block_cycle_time" and "block_cycle_time" not in d.chosen
+    assert d.effects[-1].name == "block_cycle_time"
+    assert d.effects[-1].params["t_block"] == pytest.approx(0.03, rel=0.1)
+    from core.cli.diagnosis_report import report, to_json
+
+    text = report(d, program="zigzag", machine="test", labels=["t"], effects=effects)
+    assert "sample clock     every 1 ms, the machine file's cycle" in text
+    js = json.loads(json.dumps(to_json(d, m, effects)))
+    assert js["sample_clock"]["agrees"] is True
+
+
 @pytest.mark.parametrize("cycle,period", [(math.nan, 0.003), (0.001, 0.001), (0.003, 0.003)])
 def test_the_clock_says_nothing_where_it_agrees_or_the_machine_gives_none(nc, cycle, period):
     """The zigzag as the machine file says, recorded every ``period`` s: a machine whose

@@ -129,6 +129,11 @@ def report(
             f"                   (the same test, the rapids' floor {d.rapid_floor:.0f} mm/min; "
             "and the held-out feed moves' gap no worse than the floor)"
         )
+    if d.clock_agrees:
+        lines.append(
+            f"  sample clock     every {d.sample_cycle * 1e3:.4g} ms, the machine file's cycle: "
+            "its block time is the file's (block_cycle_time is not named from a fit)"
+        )
     if d.clock is not None:
         c = d.clock
         lines.append(
@@ -210,13 +215,21 @@ def _zone_table(title: str, zones: tuple[GapZone, ...]) -> list[str]:
 
 
 def _clock_json(d: Diagnosis) -> dict | None:
-    """The cycle read off the sample clock (None where the traces' clock says nothing)."""
+    """The cycle read off the sample clock: whether it agrees with the machine file's and,
+    where not, the block time it gives (None where the clock says nothing)."""
     c = d.clock
+    if d.clock_agrees:
+        return {
+            "sample_period_s": round(d.sample_cycle, 9),
+            "machine_trace_cycle_s": d.before.setup.machine.trace_cycle,
+            "agrees": True,
+        }
     if c is None:
         return None
     return {
         "sample_period_s": round(d.sample_cycle, 9),
         "machine_trace_cycle_s": d.before.setup.machine.trace_cycle,
+        "agrees": False,
         "effect": c.name,
         "params": {k: round(v, 9) for k, v in c.params.items()},
         "held_out_gap_before": round(c.held_out_gap_before, 3),

@@ -99,6 +99,7 @@ from core.engine.effects import MOVED_SHARE, Effect, Setup
 from core.engine.indicators import IndicatorSource
 from core.engine.predict import Prediction
 from core.model.jit import allow
+from core.model.machine import Machine
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
 from core.view.annotations import Annotations
@@ -171,6 +172,12 @@ class Diagnosis:
     #: on the held-out feed moves (not fitted), and whether it was named from the clock
     clock: EffectResult | None = None
     on_clock: bool = False
+
+    @property
+    def clock_agrees(self) -> bool:
+        """Whether the traces' sample clock says the cycle the machine file says
+        (:func:`clock_agrees`): block_cycle_time is then not named from a fit."""
+        return clock_agrees(self.before.setup.machine, self.sample_cycle)
 
     @property
     def before(self) -> Prediction:
@@ -283,8 +290,14 @@ def diagnose_cases(
         r.name for r in results if bounded(effects[r.name], r.params, base.machine)
     )
     idle = _idle(indicators_of, tps, base, effects, results, before, data, floor)
-    results, best, reason = decide(results, floor, folded, stretched, idle)
     cycle = sample_cycle([al.t for _, als, _ in cases for al in als])
+    # where the clock says the cycle is the machine file's, so is the block time: a fit of
+    # another one patches something else and is not named (it stays in the table, last)
+    read = frozenset({"block_cycle_time"}) if clock_agrees(base.machine, cycle) else frozenset()
+    ranked, best, reason = decide(
+        [r for r in results if r.name not in read], floor, folded, stretched, idle
+    )
+    results = ranked + [r for r in results if r.name in read]
     clock, clock_preds, clock_why = _on_clock(
         indicators_of, tps, base, effects, cycle, before, g_before, data, floor
     )
@@ -319,7 +332,7 @@ def diagnose_cases(
     else:
         if clock_why:
             reason = f"{reason}; {clock_why}"
-        others = {r.name: effects[r.name] for r in results if r.name != best}
+        others = {r.name: effects[r.name] for r in results if r.name not in read | {best}}
         first = (fitted[best][0], fitted[best][1], others)
     if first is not None and best is not None:
         params, preds, others = first
@@ -388,6 +401,14 @@ def sample_cycle(times: Sequence[NDArray[np.float64]]) -> float:
     return float(np.mean(periods))
 
 
+def clock_agrees(machine: Machine, cycle: float) -> bool:
+    """Whether traces sampled every ``cycle`` s ran with the cycle ``machine``'s file says
+    its traces sample (``Machine.trace_cycle``, within CLOCK_SHARE): then its block time is
+    the file's. False where either is unknown."""
+    t = machine.trace_cycle
+    return math.isfinite(cycle) and math.isfinite(t) and abs(cycle / t - 1.0) <= CLOCK_SHARE
+
+
 def _on_clock(
     indicators_of: IndicatorSource,
     tps: Sequence[ToolPath],
@@ -416,7 +437,7 @@ def _on_clock(
     if (
         eff is None
         or not (math.isfinite(cycle) and math.isfinite(m.trace_cycle))
-        or abs(cycle / m.trace_cycle - 1.0) <= CLOCK_SHARE
+        or clock_agrees(m, cycle)
     ):
         return None, None, ""
     ratio = cycle / m.trace_cycle
