@@ -218,25 +218,23 @@ def _clock_json(d: Diagnosis) -> dict | None:
     """The cycle read off the sample clock: whether it agrees with the machine file's and,
     where not, the block time it gives (None where the clock says nothing)."""
     c = d.clock
-    if d.clock_agrees:
-        return {
-            "sample_period_s": round(d.sample_cycle, 9),
-            "machine_trace_cycle_s": d.before.setup.machine.trace_cycle,
-            "agrees": True,
-        }
-    if c is None:
+    if c is None and not d.clock_agrees:
         return None
-    return {
+    out: dict = {
         "sample_period_s": round(d.sample_cycle, 9),
         "machine_trace_cycle_s": d.before.setup.machine.trace_cycle,
-        "agrees": False,
-        "effect": c.name,
-        "params": {k: round(v, 9) for k, v in c.params.items()},
-        "held_out_gap_before": round(c.held_out_gap_before, 3),
-        "held_out_gap_after": round(c.held_out_gap_after, 3),
-        "p": round(c.p, 5),
-        "named": d.on_clock,
+        "agrees": d.clock_agrees,
     }
+    if c is not None:
+        out |= {
+            "effect": c.name,
+            "params": {k: round(v, 9) for k, v in c.params.items()},
+            "held_out_gap_before": round(c.held_out_gap_before, 3),
+            "held_out_gap_after": round(c.held_out_gap_after, 3),
+            "p": round(c.p, 5),
+            "named": d.on_clock,
+        }
+    return out
 
 
 def to_json(

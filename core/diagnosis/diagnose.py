@@ -327,13 +327,11 @@ def diagnose_cases(
             chosen.append(best)
             chosen_params[best] = named[1]
             current_preds = named[2]
-        if clock_why:
-            reason = f"{reason}; {clock_why}"
     else:
-        if clock_why:
-            reason = f"{reason}; {clock_why}"
         others = {r.name: effects[r.name] for r in results if r.name not in read | {best}}
         first = (fitted[best][0], fitted[best][1], others)
+    if clock_why and not on_clock:  # what the clock said, and why it was not named
+        reason = f"{reason}; {clock_why}"
     if first is not None and best is not None:
         params, preds, others = first
         chosen.append(best)
