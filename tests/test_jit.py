@@ -97,6 +97,40 @@ def test_projection_is_numpys(monkeypatch):
         _same(*_both(monkeypatch, partial(samples.project_near, mid, g)))
 
 
+def test_line_search_is_numpys(monkeypatch):
+    """core.diagnosis.align._project's search of each program line's samples (the kernel
+    project_lines against numpy's line-by-line search): samples near the path and off it,
+    lagging behind their line's move (within LAG_BACK and beyond), exactly on path points
+    and halfway between two (ties), and lines the program does not have (searched in
+    windows after)."""
+    from core.diagnosis.align import LAG_BACK, _project
+
+    tp = Ncperf().extract(str(PROGRAM))
+    path = tp.sample(PROJECTION_STEP)
+    rng = np.random.default_rng(11)
+    end = tp.end_s[-1]
+    s_true = np.sort(rng.uniform(0.0, end, 40_000))
+    q = tp.point_at(s_true) + rng.normal(0.0, 0.01, (s_true.size, 3))
+    # a fifth of the samples carry the line of a place up to 1.5 LAG_BACK ahead (a lag)
+    ahead = np.minimum(s_true + rng.uniform(0.0, 1.5 * LAG_BACK, s_true.size), end)
+    line = np.where(
+        rng.random(s_true.size) < 0.2, tp.line[tp.move_at(ahead)], tp.line[tp.move_at(s_true)]
+    )
+    far = rng.random(s_true.size) < 0.02
+    q[far] += rng.normal(0.0, 3.0, (int(far.sum()), 3))
+    # on path points and halfway between two, each on its own line's move
+    k = np.sort(rng.integers(0, path.s.size - 1, 3000))
+    on = np.concatenate([path.points[k], 0.5 * (path.points[k] + path.points[k + 1])])
+    on_line = tp.line[np.concatenate([path.move[k], path.move[k + 1]])]
+    q = np.concatenate([q, on])
+    line = np.concatenate([line, on_line])
+    unknown = rng.random(line.size) < 0.01
+    line[unknown] = np.where(rng.random(int(unknown.sum())) < 0.5, 0, int(tp.line.max()) + 1000)
+    plain, fast = _both(monkeypatch, lambda: _project(tp, q, line, path))
+    _same(plain, fast)
+    assert np.isfinite(plain[1]).all()
+
+
 def test_no_jit_switch(monkeypatch):
     for value, off in (("1", True), ("yes", True), ("0", False), ("", False)):
         monkeypatch.setenv(NO_JIT_ENV, value)

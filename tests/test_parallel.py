@@ -188,10 +188,15 @@ def test_calibration_on_two_processes_is_the_calibration_of_one():
 
 @needs_fork
 def test_alignment_on_two_processes_is_the_alignment_of_one(monkeypatch):
-    """The samples of each program line are projected on workers, pieces of lines each: the
-    same arc lengths and distances to the bit, of the projection itself (the refinement
-    after it would hide a difference) and of the alignment."""
+    """numpy's search (without the compiled kernels, core.model.jit) projects the samples
+    of each program line on workers, pieces of lines each: the same arc lengths and
+    distances to the bit, of the projection itself (the refinement after it would hide a
+    difference) and of the alignment. (The kernel searches in this process:
+    tests/test_jit.py checks it against numpy's.)"""
     import core.diagnosis.align as alignment
+    from core.model.jit import NO_JIT_ENV
+
+    monkeypatch.setenv(NO_JIT_ENV, "1")
 
     nc = Ncperf(make_plugin_manager(entry_points=False))
     tp = zigzag()

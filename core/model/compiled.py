@@ -21,6 +21,10 @@ from numba import njit
 #: it can write, else the user's cache folder), so a later process loads them instead.
 kernel = njit(cache=True, error_model="numpy", nogil=True)
 
+#: Rounding room (mm) of :func:`_nearest_in`'s skip: far above the rounding of distances and
+#: arc lengths of coordinates up to 10^5 mm (about 1e-11 mm), far below the path's spacing.
+SKIP_SLACK = 1e-6
+
 #: np.nan_to_num's value for +inf.
 FLOAT_MAX = float(np.finfo(np.float64).max)
 
@@ -691,3 +695,147 @@ def marks(
             flat = vmax(d_cr, 0.0) <= nil_distance
         through_up[k + 1] = r and flat
         through_dn[k + 1] = f and flat
+
+
+@kernel
+def _key_at(
+    x: float, y: float, z: float, e: float, k: int, px, py, pz, s_p, seq_tie: float
+) -> tuple[float, float]:
+    """core.diagnosis.align._nearest's key of path point k for one point, and its squared
+    distance."""
+    dx = x - px[k]
+    dy = y - py[k]
+    dz = z - pz[k]
+    d2 = dx * dx + dy * dy + dz * dz
+    t = (s_p[k] - e) * seq_tie
+    return d2 + t * t, d2
+
+
+@kernel
+def _nearest_in(
+    x: float,
+    y: float,
+    z: float,
+    e: float,
+    r0: int,
+    r1: int,
+    px: np.ndarray,
+    py: np.ndarray,
+    pz: np.ndarray,
+    s_p: np.ndarray,
+    seq_tie: float,
+    best: int,
+    best_key: float,
+    best_d2: float,
+) -> tuple[int, float, float]:
+    """core.diagnosis.align._nearest for one point over path points r0..r1-1 (in arc
+    length) and the best of earlier ones (``best``; -1: none yet): np.argmin's least key,
+    the first of equal ones, a NaN key least. The point whose arc length is nearest ``e``
+    is tried first, so that most others are skipped (below)."""
+    if r1 <= r0:
+        return best, best_key, best_d2
+    lo, hi = r0, r1
+    while lo < hi:  # the first point at or beyond e
+        mid = (lo + hi) // 2
+        if s_p[mid] < e:
+            lo = mid + 1
+        else:
+            hi = mid
+    first = min(lo, r1 - 1)
+    key, d2 = _key_at(x, y, z, e, first, px, py, pz, s_p, seq_tie)
+    if best < 0 or key < best_key or (key == best_key and first < best):
+        best, best_key, best_d2 = first, key, d2
+    if key != key:
+        best, best_key, best_d2 = first, key, d2
+    k = r0
+    while k < r1:
+        key, d2 = _key_at(x, y, z, e, k, px, py, pz, s_p, seq_tie)
+        if key != key or best_key != best_key:
+            # NaN (np.argmin: the first NaN): this point where it is one before the best
+            if key != key and (best_key == best_key or k < best):
+                best, best_key, best_d2 = k, key, d2
+            k += 1
+            continue
+        if key < best_key or (key == best_key and k < best):
+            best, best_key, best_d2 = k, key, d2
+        # The points after k within (d_k - d_best) of arc length are farther than the best
+        # (the path between two points is no shorter than the chord): their keys, at least
+        # their squared distances, exceed the best key, so none of them is the least or
+        # ties with it. Skipped, with SKIP_SLACK mm to spare for rounding.
+        reach = math.sqrt(d2) - math.sqrt(best_key) - SKIP_SLACK
+        k += 1
+        if reach > 0.0:
+            target = s_p[k - 1] + reach
+            step = 1
+            while k + step < r1 and s_p[k + step] < target:
+                step *= 2
+            hi = min(k + step, r1)
+            while k < hi:  # the first point at or beyond target in k..hi-1, else hi
+                mid = (k + hi) // 2
+                if s_p[mid] < target:
+                    k = mid + 1
+                else:
+                    hi = mid
+    return best, best_key, best_d2
+
+
+@kernel
+def project_lines(
+    qx: np.ndarray,
+    qy: np.ndarray,
+    qz: np.ndarray,
+    lo: np.ndarray,
+    hi: np.ndarray,
+    start: np.ndarray,
+    own: np.ndarray,
+    win: np.ndarray,
+    px: np.ndarray,
+    py: np.ndarray,
+    pz: np.ndarray,
+    s_p: np.ndarray,
+    ties: tuple[float, float],
+) -> tuple[np.ndarray, np.ndarray]:
+    """core.diagnosis.align._project's search of each program line's samples, line by line
+    (path points in arc length): the samples lo[j]..hi[j]-1 of line j (positions qx, qy,
+    qz, in time order) run on from the arc length ``start[j]`` by their own travel
+    (_run_on); each takes the nearest of the line's own path points own[j, 0]..own[j, 1]-1,
+    and the nearest of its window (win[j, 0]..win[j, 1]-1, then win[j, 2]..win[j, 3]-1)
+    where the window has more points and that is nearer by more than pass_tie. ``ties``:
+    (TOL.sequence_tie, TOL.pass_tie). Returns the arc length and distance of every sample
+    (NaN outside the lines)."""
+    seq_tie, pass_tie = ties
+    s_out = np.full(qx.size, np.nan)
+    d_out = np.full(qx.size, np.nan)
+    for j in range(lo.size):
+        n_own = own[j, 1] - own[j, 0]
+        n_win = (win[j, 1] - win[j, 0]) + (win[j, 3] - win[j, 2])
+        run = 0.0
+        for i in range(lo[j], hi[j]):
+            if i > lo[j]:
+                dx = qx[i] - qx[i - 1]
+                dy = qy[i] - qy[i - 1]
+                dz = qz[i] - qz[i - 1]
+                run += math.sqrt(dx * dx + dy * dy + dz * dz)
+            e = start[j] + run
+            k, _, d2 = _nearest_in(
+                qx[i], qy[i], qz[i], e, own[j, 0], own[j, 1], px, py, pz, s_p, seq_tie,
+                -1, np.inf, 0.0,
+            )  # fmt: skip
+            s = s_p[k]
+            d = math.sqrt(d2)
+            if n_win > n_own:
+                k2, key2, d2b = _nearest_in(
+                    qx[i], qy[i], qz[i], e, win[j, 0], win[j, 1], px, py, pz, s_p, seq_tie,
+                    -1, np.inf, 0.0,
+                )  # fmt: skip
+                k2, _, d2b = _nearest_in(
+                    qx[i], qy[i], qz[i], e, win[j, 2], win[j, 3], px, py, pz, s_p, seq_tie,
+                    k2, key2, d2b,
+                )  # fmt: skip
+                d2nd = math.sqrt(d2b)
+                if d2nd < d - pass_tie:
+                    s = s_p[k2]
+                    d = d2nd
+            s_out[i] = s
+            d_out[i] = d
+    return s_out, d_out
