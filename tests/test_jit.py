@@ -131,6 +131,99 @@ def test_line_search_is_numpys(monkeypatch):
     assert np.isfinite(plain[1]).all()
 
 
+def _numbers(rng: np.random.Generator, n: int) -> list[str]:
+    """Decimals as recorders and people write them: fixed points of 0-9 places, signs,
+    negative zeros, exponents, mantissas of up to 15 digits, whole numbers, leading and
+    trailing points."""
+    x = rng.normal(0.0, 10.0 ** rng.integers(-5, 4, n))
+    out = []
+    for k, v in enumerate(x):
+        kind = k % 9
+        if kind == 0:
+            out.append(f"{v:.{k % 10}f}")
+        elif kind == 1:
+            out.append(f"{v:.{k % 15}e}")
+        elif kind == 2:
+            out.append(f"{v:.15g}")
+        elif kind == 3:
+            out.append(f"{v:.{k % 15 + 1}g}")
+        elif kind == 4:
+            out.append("-0.000000" if k % 2 else "+0")
+        elif kind == 5:
+            out.append(f"{int(v)}")
+        elif kind == 6:
+            out.append(f"{abs(v):.3f}".lstrip("0") or "0")
+        elif kind == 7:
+            out.append(f"{int(abs(v))}.")
+        else:
+            out.append(f"{v:.6f}E+{k % 3}")
+    return out
+
+
+def test_trace_reader_is_numpys(monkeypatch, tmp_path):
+    """The compiled CSV reader (parse_rows) reads every number as numpy's reader does, bit
+    for bit; rows it does not take (spaces, comments, NaN, a lone CR, an empty line, a
+    missing field, non-ASCII text in a column not read) leave the file to numpy's reader,
+    its numbers or its one-line error the same."""
+    from adapters.traces import read_csv_trace
+    from core.model.errors import InputError
+    from core.model.trace import TraceOptions
+
+    rng = np.random.default_rng(3)
+    n = 4000
+    t = [f"{0.001 * k:.6f}" for k in range(n)]
+    cols = [_numbers(rng, n) for _ in range(4)]
+    line = [str(k // 7) for k in range(n)]
+    note = ["x" if k % 5 else "a note" for k in range(n)]  # text in a column not read
+    rows = [",".join(r) for r in zip(t, *cols, note, line, strict=True)]
+    plain = "t,x,y,z,v,note,line\n" + "\n".join(rows) + "\n"
+    bodies = {
+        "plain": plain,
+        "crlf, no last newline": plain.replace("\n", "\r\n").rstrip("\r\n"),
+    }
+    for what, bad in (
+        ("a space", " 1.5"),
+        ("a comment", "1.5 # c"),
+        ("nan", "nan"),
+        ("a lone CR", "1.5\r2"),
+        ("17 digits (beyond 2^53)", "0.12345678901234567"),
+        ("20 digits", "1.2345678901234567890"),
+        ("an exponent beyond 22", "1e30"),
+        ("no digits", "-."),
+    ):
+        k = 2000
+        broken = rows[k].split(",")
+        broken[2] = bad
+        bodies[what] = plain.replace(rows[k] + "\n", ",".join(broken) + "\n")
+    bodies["an empty line"] = plain.replace(rows[9] + "\n", rows[9] + "\n\n")
+    bodies["a missing field"] = plain.replace(rows[9] + "\n", rows[9].rsplit(",", 1)[0] + "\n")
+    bodies["non-ASCII text not read"] = plain.replace("a note", "é", 3)
+
+    def read(path):
+        try:
+            tr = read_csv_trace(path, TraceOptions())
+        except InputError as exc:
+            return str(exc)
+        return (tr.t, tr.pos, tr.v, tr.line)
+
+    kernels = compiled()
+    to = np.array([0, 1, 2, 3, 4, -1, 5])
+    for what, body in bodies.items():
+        data = body.encode("utf-8")
+        buf = np.frombuffer(data, dtype=np.uint8)[data.index(b"\n") + 1 :]
+        taken = kernels.parse_rows(buf, 7, to)[1] < 0
+        assert taken == (what in ("plain", "crlf, no last newline")), what
+        path = tmp_path / "trace.csv"
+        path.write_bytes(body.encode("utf-8"))
+        a, b = _both(monkeypatch, partial(read, path))
+        assert type(a) is type(b), what
+        if isinstance(a, str):
+            assert a == b, what
+            assert not taken, f"{what}: {a}"
+        else:
+            _same(a, b)
+
+
 def test_no_jit_switch(monkeypatch):
     for value, off in (("1", True), ("yes", True), ("0", False), ("", False)):
         monkeypatch.setenv(NO_JIT_ENV, value)

@@ -305,8 +305,10 @@ def _aligned(
     aligned on ``tp`` (on ``jobs`` worker processes), and its label; a trace that does not
     align is an error ending "no ``purpose``"."""
     from core.diagnosis.align import align
+    from core.model.jit import allow
     from core.model.trace import TraceOptions
 
+    allow()  # the compiled kernels from the reading of the traces on (core.model.jit)
     options = TraceOptions(units=args.trace_units, kind=args.trace_kind)
     alignments, labels = [], []
     for path in paths:

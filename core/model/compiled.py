@@ -839,3 +839,123 @@ def project_lines(
             s_out[i] = s
             d_out[i] = d
     return s_out, d_out
+
+
+#: 10^0 .. 10^22: the powers of ten a double holds exactly (Clinger's fast path).
+_TENS = np.array([10.0**k for k in range(23)])
+#: The largest whole number below which every whole number is a double (2^53).
+_EXACT = 2**53
+
+
+@kernel
+def _row_count(buf: np.ndarray) -> int:
+    """Rows of ``buf``: its newlines, and one more where the last row has none."""
+    n = 0
+    for b in buf:
+        if b == 10:
+            n += 1
+    if buf.size and buf[buf.size - 1] != 10:
+        n += 1
+    return n
+
+
+@kernel
+def parse_rows(buf: np.ndarray, ncols: int, want: np.ndarray) -> tuple[np.ndarray, int]:
+    """Rows of comma-separated numbers (``buf``: UTF-8 bytes, rows ending in a newline or
+    CR LF; ``ncols`` fields a row, field j going to column want[j] of the result, -1: not
+    wanted) as ``float(field)`` reads them -- where every wanted field is a plain decimal
+    (a sign, digits, a point, digits, an exponent) of at most 18 significant digits whose
+    whole number is below 2^53 and whose power of ten is within 10^+-22: then the number is
+    that whole number times or over an exact power of ten, one IEEE operation, the correctly
+    rounded double float() gives (Clinger's fast path). Returns the (rows, wanted) numbers
+    and -1, or the index of the first row the fast path cannot take (any other byte, field
+    count or number: numpy's reader, with its messages, does the file)."""
+    rows = _row_count(buf)
+    width = 0
+    for c in want:
+        if c >= 0:
+            width += 1
+    out = np.empty((rows, width))
+    i = 0
+    n = buf.size
+    for r in range(rows):
+        if i >= n or buf[i] == 10 or buf[i] == 13:
+            return out, r  # an empty line
+        for j in range(ncols):
+            col = want[j]
+            if col < 0:
+                while i < n and buf[i] != 44 and buf[i] != 10 and buf[i] != 13:
+                    b = buf[i]
+                    if b >= 128 or b == 11 or b == 12 or (28 <= b <= 30) or b == 35:
+                        return out, r  # another line break to Python, or a comment
+                    i += 1
+            else:
+                neg = False
+                if i < n and (buf[i] == 45 or buf[i] == 43):
+                    neg = buf[i] == 45
+                    i += 1
+                mant = 0
+                digits = 0  # significant digits (from the first non-zero one)
+                seen = 0  # digits at all
+                scale = 0  # digits after the point
+                while i < n and 48 <= buf[i] <= 57:
+                    d = buf[i] - 48
+                    if digits or d:
+                        digits += 1
+                        mant = mant * 10 + d
+                    seen += 1
+                    i += 1
+                if i < n and buf[i] == 46:
+                    i += 1
+                    while i < n and 48 <= buf[i] <= 57:
+                        d = buf[i] - 48
+                        if digits or d:
+                            digits += 1
+                            mant = mant * 10 + d
+                        seen += 1
+                        scale += 1
+                        i += 1
+                if seen == 0 or digits > 18:
+                    return out, r
+                e10 = 0
+                if i < n and (buf[i] == 101 or buf[i] == 69):
+                    i += 1
+                    eneg = False
+                    if i < n and (buf[i] == 45 or buf[i] == 43):
+                        eneg = buf[i] == 45
+                        i += 1
+                    ed = 0
+                    while i < n and 48 <= buf[i] <= 57:
+                        if ed < 6:
+                            e10 = e10 * 10 + (buf[i] - 48)
+                        ed += 1
+                        i += 1
+                    if ed == 0 or ed >= 6:
+                        return out, r
+                    if eneg:
+                        e10 = -e10
+                e10 -= scale
+                if mant > _EXACT:
+                    return out, r
+                v = float(mant)
+                if mant != 0:
+                    if -22 <= e10 < 0:
+                        v = v / _TENS[-e10]
+                    elif 0 < e10 <= 22:
+                        v = v * _TENS[e10]
+                    elif e10 != 0:
+                        return out, r
+                out[r, col] = -v if neg else v
+            if j < ncols - 1:
+                if i >= n or buf[i] != 44:
+                    return out, r  # fewer fields, or something after a number
+                i += 1
+        if i < n and buf[i] == 13:
+            i += 1
+            if i >= n or buf[i] != 10:
+                return out, r  # a lone CR: a line break of its own to Python
+        if i < n:
+            if buf[i] != 10:
+                return out, r  # more fields, or something after a number
+            i += 1
+    return out, -1
