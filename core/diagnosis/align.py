@@ -161,6 +161,21 @@ def _project(
     dist = np.full(m, np.inf)
     if lines is not None and np.any(lines > 0):
         line_of_sample = lines
+        # The samples of each line (in time order), and the path points of moves a..b as
+        # index ranges: the path points are in move order, and (checked) in arc length.
+        by_line = np.argsort(line_of_sample, kind="stable")
+        u_all, u_first = np.unique(line_of_sample[by_line], return_index=True)
+        u_last = np.append(u_first[1:], m)
+        ordered = s_p.size < 2 or bool(np.all(s_p[1:] >= s_p[:-1]))
+        searched = (
+            _project_compiled(q, by_line, u_all, u_first, u_last, tp, path) if ordered else None
+        )
+        if searched is not None:
+            s_l, d_l, done_l = searched
+            s[by_line], dist[by_line] = s_l, d_l
+            done = np.zeros(m, dtype=bool)
+            done[by_line] = done_l
+            return _rest(q, np.flatnonzero(~done), s, dist, path)
         moves_of_line: dict[int, tuple[int, int]] = {}
         lp = tp.line
         order = np.argsort(lp, kind="stable")
@@ -169,12 +184,6 @@ def _project(
         for u, a, b in zip(uniq.tolist(), first_idx.tolist(), last_idx.tolist(), strict=True):
             mv = order[a:b]
             moves_of_line[u] = (int(mv.min()), int(mv.max()))
-        # The samples of each line (in time order), and the path points of moves a..b as
-        # index ranges: the path points are in move order, and (checked) in arc length.
-        by_line = np.argsort(line_of_sample, kind="stable")
-        u_all, u_first = np.unique(line_of_sample[by_line], return_index=True)
-        u_last = np.append(u_first[1:], m)
-        ordered = s_p.size < 2 or bool(np.all(s_p[1:] >= s_p[:-1]))
 
         def piece(j0: int, j1: int) -> tuple[NDArray, NDArray, NDArray]:
             """Lines j0..j1-1 (of ``u_all``): the arc length, distance and whether placed
@@ -233,16 +242,6 @@ def _project(
                 done_g[f0 - f_lo : f1 - f_lo] = True
             return s_g, dist_g, done_g
 
-        searched = (
-            _project_compiled(q, by_line, u_all, u_first, u_last, tp, path) if ordered else None
-        )
-        if searched is not None:
-            s_l, d_l, done_l = searched
-            s[by_line], dist[by_line] = s_l, d_l
-            done = np.zeros(m, dtype=bool)
-            done[by_line] = done_l
-            rest = np.flatnonzero(~done)
-            return _rest(q, rest, s, dist, path)
         # pieces of lines with about as many samples each
         workers = workers_for(jobs, u_all.size)
         count = 1 if workers == 1 else workers * LINE_PIECES
@@ -313,7 +312,7 @@ def _project_compiled(
     win = np.ascontiguousarray(np.concatenate([first, second], axis=1), dtype=np.int64)
     lo, hi = u_first[known], u_last[known]
     qs = q[by_line]
-    px, py, pz = path._columns
+    px, py, pz = path.columns
     s_l, d_l = kernels.project_lines(
         np.ascontiguousarray(qs[:, 0]),
         np.ascontiguousarray(qs[:, 1]),
@@ -329,10 +328,7 @@ def _project_compiled(
         np.ascontiguousarray(s_p),
         (TOL.sequence_tie, TOL.pass_tie),
     )
-    done = np.zeros(qs.shape[0], dtype=bool)
-    lines_done = np.zeros(u_all.size, dtype=bool)
-    lines_done[known] = True
-    done[:] = np.repeat(lines_done, np.diff(np.append(u_first, qs.shape[0])))
+    done = np.repeat(known, u_last - u_first)  # the samples of the program's lines
     s_l = np.where(done, s_l, 0.0)
     d_l = np.where(done, d_l, np.inf)
     return s_l, d_l, done

@@ -83,7 +83,7 @@ class PathSamples:
     step: float
 
     @cached_property
-    def _columns(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    def columns(self) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
         """x, y and z of the points, each contiguous."""
         return tuple(np.ascontiguousarray(self.points[:, j]) for j in range(3))  # type: ignore[return-value]
 
@@ -118,7 +118,7 @@ class PathSamples:
             return self._project_near_gathered(q, s_guess, half)
         kernels = compiled()
         if kernels is not None:  # the same search point by point (core.model.jit)
-            px, py, pz = self._columns
+            px, py, pz = self.columns
             return kernels.project_near(
                 np.ascontiguousarray(q),
                 np.ascontiguousarray(s_guess),
@@ -175,7 +175,7 @@ class PathSamples:
         (sqrt(2 a d)). Where a chord has no length or the foot is not finite, the point."""
         s_p = self.s
         last = s_p.size - 1
-        px, py, pz = self._columns
+        px, py, pz = self.columns
         qx, qy, qz = q[:, 0], q[:, 1], q[:, 2]
         s = s_p[i]
         best = d2.copy()
@@ -371,7 +371,7 @@ class PathSamples:
     ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
         """What :meth:`project_near` minimises for the path points ``at`` (clipped to the
         path): squared distance plus the pass tie-break, and the squared distance."""
-        px, py, pz = self._columns
+        px, py, pz = self.columns
         dx = np.take(px, at, mode="clip")
         dx -= qx
         dy = np.take(py, at, mode="clip")
