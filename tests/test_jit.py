@@ -101,8 +101,8 @@ def test_line_search_is_numpys(monkeypatch):
     """core.diagnosis.align._project's search of each program line's samples (the kernel
     project_lines against numpy's line-by-line search): samples near the path and off it,
     lagging behind their line's move (within LAG_BACK and beyond), exactly on path points
-    and halfway between two (ties), and lines the program does not have (searched in
-    windows after)."""
+    and halfway between two (ties), lines the program does not have (searched in windows
+    after); and on a path that jumps."""
     from core.diagnosis.align import LAG_BACK, _project
 
     tp = Ncperf().extract(str(PROGRAM))
@@ -129,6 +129,14 @@ def test_line_search_is_numpys(monkeypatch):
     plain, fast = _both(monkeypatch, lambda: _project(tp, q, line, path))
     _same(plain, fast)
     assert np.isfinite(plain[1]).all()
+    # a path that jumps (a move not starting where the one before ended): the second half's
+    # points 0.5 mm over, the samples of every other line with them
+    half = path.s.size // 2
+    jumped = dataclasses.replace(path, points=path.points.copy())
+    jumped.points[half:] += [0.5, 0.0, 0.0]
+    over = (line % 2 == 1)[:, None] * np.array([0.5, 0.0, 0.0])
+    plain, fast = _both(monkeypatch, lambda: _project(tp, q + over, line, jumped))
+    _same(plain, fast)
 
 
 def _numbers(rng: np.random.Generator, n: int) -> list[str]:

@@ -46,6 +46,10 @@ FAR = 0.5
 #: covers less than MIN_COVERAGE of the program's feed length.
 MAX_FAR_SHARE = 0.2
 MIN_COVERAGE = 0.5
+#: Rounding room (mm) of the compiled search's skip (:func:`_jumps`): far above the rounding
+#: of distances and arc lengths of coordinates up to 10^5 mm (about 1e-11 mm), far below the
+#: path's spacing.
+SKIP_SLACK = 1e-6
 #: How far behind its program line's move a sample may be (mm): actual positions lag the
 #: setpoint whose line the controller reports (v tau: 10 mm at 20 m/min and 30 ms).
 LAG_BACK = 10.0
@@ -327,11 +331,23 @@ def _project_compiled(
         pz,
         np.ascontiguousarray(s_p),
         (TOL.sequence_tie, TOL.pass_tie),
+        _jumps(path),
     )
     done = np.repeat(known, u_last - u_first)  # the samples of the program's lines
     s_l = np.where(done, s_l, 0.0)
     d_l = np.where(done, d_l, np.inf)
     return s_l, d_l, done
+
+
+def _jumps(path: PathSamples) -> float:
+    """How much farther apart (mm) two path points can be than their arc lengths differ:
+    the steps between consecutive points beyond their arc lengths' difference, summed, and
+    SKIP_SLACK for rounding. A path that runs on from where it was adds nothing (a chord is
+    no longer than its arc); a move that does not start where the one before ended (an arc
+    end rounded in the program: 0.1 um) adds its jump. The compiled search skips points
+    by it (core.model.compiled._nearest_in)."""
+    step = np.linalg.norm(np.diff(path.points, axis=0), axis=1)
+    return float(np.sum(np.maximum(step - np.diff(path.s), 0.0))) + SKIP_SLACK
 
 
 def _rest(q: NDArray, rest: NDArray, s: NDArray, dist: NDArray, path: PathSamples):

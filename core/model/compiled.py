@@ -21,10 +21,6 @@ from numba import njit
 #: it can write, else the user's cache folder), so a later process loads them instead.
 kernel = njit(cache=True, error_model="numpy", nogil=True)
 
-#: Rounding room (mm) of :func:`_nearest_in`'s skip: far above the rounding of distances and
-#: arc lengths of coordinates up to 10^5 mm (about 1e-11 mm), far below the path's spacing.
-SKIP_SLACK = 1e-6
-
 #: np.nan_to_num's value for +inf.
 FLOAT_MAX = float(np.finfo(np.float64).max)
 
@@ -724,6 +720,7 @@ def _nearest_in(
     pz: np.ndarray,
     s_p: np.ndarray,
     seq_tie: float,
+    slack: float,
     best: int,
     best_key: float,
     best_d2: float,
@@ -731,7 +728,9 @@ def _nearest_in(
     """core.diagnosis.align._nearest for one point over path points r0..r1-1 (in arc
     length) and the best of earlier ones (``best``; -1: none yet): np.argmin's least key,
     the first of equal ones, a NaN key least. The point whose arc length is nearest ``e``
-    is tried first, so that most others are skipped (below)."""
+    is tried first, so that most others are skipped (below); ``slack`` (mm): how much the
+    distance of two path points may exceed their arc lengths' difference (the path's
+    jumps, and rounding)."""
     if r1 <= r0:
         return best, best_key, best_d2
     lo, hi = r0, r1
@@ -758,11 +757,11 @@ def _nearest_in(
             continue
         if key < best_key or (key == best_key and k < best):
             best, best_key, best_d2 = k, key, d2
-        # The points after k within (d_k - d_best) of arc length are farther than the best
-        # (the path between two points is no shorter than the chord): their keys, at least
-        # their squared distances, exceed the best key, so none of them is the least or
-        # ties with it. Skipped, with SKIP_SLACK mm to spare for rounding.
-        reach = math.sqrt(d2) - math.sqrt(best_key) - SKIP_SLACK
+        # The points after k within (d_k - d_best - slack) of arc length are farther than
+        # the best (the path between two points is no shorter than their distance, but for
+        # its jumps): their keys, at least their squared distances, exceed the best key, so
+        # none of them is the least or ties with it. Skipped.
+        reach = math.sqrt(d2) - math.sqrt(best_key) - slack
         k += 1
         if reach > 0.0:
             target = s_p[k - 1] + reach
@@ -794,6 +793,7 @@ def project_lines(
     pz: np.ndarray,
     s_p: np.ndarray,
     ties: tuple[float, float],
+    slack: float,
 ) -> tuple[np.ndarray, np.ndarray]:
     """core.diagnosis.align._project's search of each program line's samples, line by line
     (path points in arc length): the samples lo[j]..hi[j]-1 of line j (positions qx, qy,
@@ -801,8 +801,8 @@ def project_lines(
     (_run_on); each takes the nearest of the line's own path points own[j, 0]..own[j, 1]-1,
     and the nearest of its window (win[j, 0]..win[j, 1]-1, then win[j, 2]..win[j, 3]-1)
     where the window has more points and that is nearer by more than pass_tie. ``ties``:
-    (TOL.sequence_tie, TOL.pass_tie). Returns the arc length and distance of every sample
-    (NaN outside the lines)."""
+    (TOL.sequence_tie, TOL.pass_tie); ``slack``: see :func:`_nearest_in`. Returns the arc
+    length and distance of every sample (NaN outside the lines)."""
     seq_tie, pass_tie = ties
     s_out = np.full(qx.size, np.nan)
     d_out = np.full(qx.size, np.nan)
@@ -819,18 +819,18 @@ def project_lines(
             e = start[j] + run
             k, _, d2 = _nearest_in(
                 qx[i], qy[i], qz[i], e, own[j, 0], own[j, 1], px, py, pz, s_p, seq_tie,
-                -1, np.inf, 0.0,
+                slack, -1, np.inf, 0.0,
             )  # fmt: skip
             s = s_p[k]
             d = math.sqrt(d2)
             if n_win > n_own:
                 k2, key2, d2b = _nearest_in(
                     qx[i], qy[i], qz[i], e, win[j, 0], win[j, 1], px, py, pz, s_p, seq_tie,
-                    -1, np.inf, 0.0,
+                    slack, -1, np.inf, 0.0,
                 )  # fmt: skip
                 k2, _, d2b = _nearest_in(
                     qx[i], qy[i], qz[i], e, win[j, 2], win[j, 3], px, py, pz, s_p, seq_tie,
-                    k2, key2, d2b,
+                    slack, k2, key2, d2b,
                 )  # fmt: skip
                 d2nd = math.sqrt(d2b)
                 if d2nd < d - pass_tie:
