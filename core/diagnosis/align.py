@@ -282,7 +282,7 @@ def _project_compiled(
     are not in use, or where a line has no path point of its own (numpy's search says what
     that is)."""
     kernels = compiled()
-    if kernels is None:
+    if kernels is None or tp.n == 0 or path.s.size == 0:
         return None
     owner, s_p = path.move, path.s
     # each program line's first and last move
