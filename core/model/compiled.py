@@ -860,6 +860,22 @@ def _row_count(buf: np.ndarray) -> int:
 
 
 @kernel
+def _digit_run(buf: np.ndarray, i: int, mant: int, digits: int) -> tuple[int, int, int, int]:
+    """The digits of ``buf`` from ``i`` on, appended to the whole number ``mant`` from the
+    first non-zero one (``digits``: how many it has): the index after them, the whole
+    number, its significant digits, and how many digits were read."""
+    count = 0
+    while i < buf.size and 48 <= buf[i] <= 57:
+        d = buf[i] - 48
+        if digits or d:
+            digits += 1
+            mant = mant * 10 + d
+        count += 1
+        i += 1
+    return i, mant, digits, count
+
+
+@kernel
 def parse_rows(buf: np.ndarray, ncols: int, want: np.ndarray) -> tuple[np.ndarray, int]:
     """Rows of comma-separated numbers (``buf``: UTF-8 bytes, rows ending in a newline or
     CR LF; ``ncols`` fields a row, field j going to column want[j] of the result, -1: not
@@ -894,27 +910,13 @@ def parse_rows(buf: np.ndarray, ncols: int, want: np.ndarray) -> tuple[np.ndarra
                 if i < n and (buf[i] == 45 or buf[i] == 43):
                     neg = buf[i] == 45
                     i += 1
-                mant = 0
-                digits = 0  # significant digits (from the first non-zero one)
-                seen = 0  # digits at all
-                scale = 0  # digits after the point
-                while i < n and 48 <= buf[i] <= 57:
-                    d = buf[i] - 48
-                    if digits or d:
-                        digits += 1
-                        mant = mant * 10 + d
-                    seen += 1
-                    i += 1
+                # the digits before and after the point (significant ones from the first
+                # non-zero one)
+                i, mant, digits, seen = _digit_run(buf, i, 0, 0)
+                scale = 0
                 if i < n and buf[i] == 46:
-                    i += 1
-                    while i < n and 48 <= buf[i] <= 57:
-                        d = buf[i] - 48
-                        if digits or d:
-                            digits += 1
-                            mant = mant * 10 + d
-                        seen += 1
-                        scale += 1
-                        i += 1
+                    i, mant, digits, scale = _digit_run(buf, i + 1, mant, digits)
+                    seen += scale
                 if seen == 0 or digits > 18:
                     return out, r
                 e10 = 0
