@@ -63,6 +63,7 @@ from core.diagnosis.resample import (
     feed_level,
     gap,
     held_out_chunks,
+    held_out_speeds,
     rapid_data,
     rapid_gap,
     resample,
@@ -654,13 +655,14 @@ def _evidence(
     sq_before, _ = held_out_chunks(before, data)
     out = []
     for name, (params, preds) in fitted.items():
-        sq_after, _ = held_out_chunks(preds, data)
+        speeds = held_out_speeds(preds, data)
+        sq_after, _ = held_out_chunks(preds, data, speeds)
         out.append(
             EffectResult(
                 name,
                 params,
                 g_before,
-                gap(preds, data, "held_out"),
+                gap(preds, data, "held_out", speeds),
                 gap(preds, data, "calibration"),
                 moved=_moved(effects[name], params, effects[name].start(base.machine)),
                 p=sign_flip_p(sq_before, sq_after),

@@ -206,19 +206,28 @@ def pieces(d: Data) -> NDArray[np.int64]:
     return np.clip(np.searchsorted(edges, d.s, side="right") - 1, 0, k - 1)
 
 
+def held_out_speeds(preds: Sequence[Prediction], data: Sequence[Data]) -> list[NDArray]:
+    """Each run's predicted speed at its held-out grid points: for :func:`held_out_chunks`
+    and :func:`gap` of the same predictions (the evidence of an effect needs both), made
+    once."""
+    return [preds[d.case].speed_at(d.s[~d.calibration]) for d in data]
+
+
 def held_out_chunks(
-    preds: Sequence[Prediction], data: Sequence[Data]
+    preds: Sequence[Prediction], data: Sequence[Data], speeds: Sequence[NDArray] | None = None
 ) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """Per held-out piece (run by run): the time-weighted sum of the squared gap
-    ((mm/min)^2 s) and the time (s) -- the samples the decision rule's test uses."""
+    ((mm/min)^2 s) and the time (s) -- the samples the decision rule's test uses.
+    ``speeds``: the predictions' :func:`held_out_speeds`, if made already."""
     sq: list[float] = []
     n: list[float] = []
-    for d in data:
+    for i, d in enumerate(data):
         sel = ~d.calibration
         if not sel.any():
             continue
         chunk = d.chunk if d.chunk is not None else np.zeros(d.s.size, dtype=np.int64)
-        r = (d.v[sel] - preds[d.case].speed_at(d.s[sel])) * PER_MIN
+        v = preds[d.case].speed_at(d.s[sel]) if speeds is None else speeds[i]
+        r = (d.v[sel] - v) * PER_MIN
         w = d.weight[sel]
         c = chunk[sel]
         u = np.unique(c)
@@ -290,11 +299,17 @@ def _speeds(pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_]) -> ND
     return v
 
 
-def gap(preds: Sequence[Prediction], data: Sequence[Data], which: str) -> float:
+def gap(
+    preds: Sequence[Prediction],
+    data: Sequence[Data],
+    which: str,
+    speeds: Sequence[NDArray] | None = None,
+) -> float:
     """RMS over time of measured - predicted feed (mm/min) on the calibration, held-out or
-    all data."""
+    all data. ``speeds``: for the held-out data, the predictions' :func:`held_out_speeds`,
+    if made already."""
     sq, n = 0.0, 0.0
-    for d in data:
+    for i, d in enumerate(data):
         sel = (
             d.calibration
             if which == "calibration"
@@ -304,7 +319,10 @@ def gap(preds: Sequence[Prediction], data: Sequence[Data], which: str) -> float:
         )
         if not sel.any():
             continue
-        r = d.v[sel] - _speeds(preds[d.case], d, which, sel)
+        if which == "held_out" and speeds is not None:
+            r = d.v[sel] - speeds[i]
+        else:
+            r = d.v[sel] - _speeds(preds[d.case], d, which, sel)
         w = d.weight[sel]
         sq += float(np.sum(w * r * r))
         n += float(w.sum())
