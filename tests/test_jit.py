@@ -232,6 +232,27 @@ def test_trace_reader_is_numpys(monkeypatch, tmp_path):
             _same(a, b)
 
 
+def test_sorted_places_are_searchsorteds():
+    """sorted_places (each search from the last one's place) gives np.searchsorted's places:
+    sorted and shuffled needles, values equal to the array's (duplicates among them), just
+    above and below them, beyond both ends; an array of one value."""
+    rng = np.random.default_rng(2)
+    kernels = compiled()
+    for trial in range(400):
+        s = np.sort(np.round(rng.uniform(0.0, 10.0, int(rng.integers(1, 80))), 1))
+        if trial % 4 == 3:
+            s = np.full(s.size, 5.0)
+        x = rng.uniform(-1.0, 11.0, int(rng.integers(1, 300)))
+        for needles in (
+            np.sort(x),
+            x,
+            np.concatenate([s, np.nextafter(s, np.inf), np.nextafter(s, -np.inf), [-9.0, 19.0]]),
+        ):
+            np.testing.assert_array_equal(
+                kernels.sorted_places(s, needles), np.searchsorted(s, needles)
+            )
+
+
 def test_no_jit_switch(monkeypatch):
     for value, off in (("1", True), ("yes", True), ("0", False), ("", False)):
         monkeypatch.setenv(NO_JIT_ENV, value)

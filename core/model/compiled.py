@@ -326,8 +326,9 @@ def project_near(
     floats: tuple[float, float, float],
 ) -> tuple[np.ndarray, np.ndarray]:
     """core.model.sampling.PathSamples.project_near of finite points ``q`` ((m, 3)) with
-    finite guesses, ``j`` = searchsorted(s_p, guess): the same blocks, the same first look
-    where its probe says it pays, the same window search and foot, point by point.
+    finite guesses, ``j`` = searchsorted(s_p, guess) (:func:`sorted_places`): the same
+    blocks, the same first look where its probe says it pays, the same window search and
+    foot, point by point.
     ``reach`` and ``clearance``: PathSamples._reach and _clearance(half + NEAR_FIRST)
     (empty where half < NEAR_FIRST); ``ints`` (NEAR_BLOCK, NEAR_PROBE, NEAR_FIRST,
     CLEAR_FROM, COARSE), ``floats`` (NEAR_WORTH, NEAR_SLACK, TOL.pass_tie)."""
@@ -961,3 +962,38 @@ def parse_rows(buf: np.ndarray, ncols: int, want: np.ndarray) -> tuple[np.ndarra
                 return out, r  # more fields, or something after a number
             i += 1
     return out, -1
+
+
+@kernel
+def sorted_places(s_p: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """np.searchsorted(s_p, x) (the first place whose value is at least x) of finite ``x``
+    in sorted ``s_p``, each searched from the place of the one before in steps that double
+    (points along a path come in order: a few steps each, not a whole bisection)."""
+    n = s_p.size
+    out = np.empty(x.size, dtype=np.int64)
+    k = 0
+    for i in range(x.size):
+        v = x[i]
+        # bracket the answer in lo..hi (the answer is the first place in it with s_p >= v,
+        # or hi), from k up or down
+        if k < n and s_p[k] < v:
+            lo, step = k + 1, 1
+            while k + step < n and s_p[k + step] < v:
+                lo = k + step + 1
+                step *= 2
+            hi = min(k + step, n)
+        else:
+            hi, step = k, 1
+            while k - step >= 0 and s_p[k - step] >= v:
+                hi = k - step
+                step *= 2
+            lo = max(k - step + 1, 0)
+        while lo < hi:
+            mid = (lo + hi) // 2
+            if s_p[mid] < v:
+                lo = mid + 1
+            else:
+                hi = mid
+        out[i] = lo
+        k = min(lo, n - 1) if n else 0
+    return out

@@ -122,7 +122,7 @@ class PathSamples:
             return kernels.project_near(
                 np.ascontiguousarray(q),
                 np.ascontiguousarray(s_guess),
-                np.searchsorted(s_p, s_guess),
+                kernels.sorted_places(np.ascontiguousarray(s_p), np.ascontiguousarray(s_guess)),
                 px,
                 py,
                 pz,
