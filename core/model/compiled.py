@@ -695,6 +695,31 @@ def marks(
 
 
 @kernel
+def _bisect_left(a: np.ndarray, v: float, lo: int, hi: int) -> int:
+    """The first place in lo..hi-1 of sorted ``a`` whose value is at least ``v``, else hi
+    (np.searchsorted's left side, within lo..hi)."""
+    while lo < hi:
+        mid = (lo + hi) // 2
+        if a[mid] < v:
+            lo = mid + 1
+        else:
+            hi = mid
+    return lo
+
+
+@kernel
+def _gallop_left(a: np.ndarray, v: float, k: int, hi: int) -> int:
+    """:func:`_bisect_left` of k..hi-1, looked for from k in steps that double (the answer
+    is most often a few places on)."""
+    if k >= hi or a[k] >= v:
+        return k
+    step = 1
+    while k + step < hi and a[k + step] < v:
+        step *= 2
+    return _bisect_left(a, v, k + step // 2 + 1, min(k + step, hi))
+
+
+@kernel
 def _key_at(
     x: float, y: float, z: float, e: float, k: int, px, py, pz, s_p, seq_tie: float
 ) -> tuple[float, float]:
@@ -734,18 +759,14 @@ def _nearest_in(
     jumps, and rounding)."""
     if r1 <= r0:
         return best, best_key, best_d2
-    lo, hi = r0, r1
-    while lo < hi:  # the first point at or beyond e
-        mid = (lo + hi) // 2
-        if s_p[mid] < e:
-            lo = mid + 1
-        else:
-            hi = mid
-    first = min(lo, r1 - 1)
+    first = min(_bisect_left(s_p, e, r0, r1), r1 - 1)  # the first point at or beyond e
     key, d2 = _key_at(x, y, z, e, first, px, py, pz, s_p, seq_tie)
-    if best < 0 or key < best_key or (key == best_key and first < best):
-        best, best_key, best_d2 = first, key, d2
-    if key != key:
+    if (
+        best < 0
+        or (key != key and best_key == best_key)
+        or key < best_key
+        or (key == best_key and first < best)
+    ):
         best, best_key, best_d2 = first, key, d2
     k = r0
     while k < r1:
@@ -765,17 +786,7 @@ def _nearest_in(
         reach = math.sqrt(d2) - math.sqrt(best_key) - slack
         k += 1
         if reach > 0.0:
-            target = s_p[k - 1] + reach
-            step = 1
-            while k + step < r1 and s_p[k + step] < target:
-                step *= 2
-            hi = min(k + step, r1)
-            while k < hi:  # the first point at or beyond target in k..hi-1, else hi
-                mid = (k + hi) // 2
-                if s_p[mid] < target:
-                    k = mid + 1
-                else:
-                    hi = mid
+            k = _gallop_left(s_p, s_p[k - 1] + reach, k, r1)
     return best, best_key, best_d2
 
 
@@ -974,26 +985,14 @@ def sorted_places(s_p: np.ndarray, x: np.ndarray) -> np.ndarray:
     k = 0
     for i in range(x.size):
         v = x[i]
-        # bracket the answer in lo..hi (the answer is the first place in it with s_p >= v,
-        # or hi), from k up or down
-        if k < n and s_p[k] < v:
-            lo, step = k + 1, 1
-            while k + step < n and s_p[k + step] < v:
-                lo = k + step + 1
-                step *= 2
-            hi = min(k + step, n)
-        else:
+        if k < n and s_p[k] < v:  # on from k
+            at = _gallop_left(s_p, v, k, n)
+        else:  # at k or before it: back in steps that double, then halving
             hi, step = k, 1
             while k - step >= 0 and s_p[k - step] >= v:
                 hi = k - step
                 step *= 2
-            lo = max(k - step + 1, 0)
-        while lo < hi:
-            mid = (lo + hi) // 2
-            if s_p[mid] < v:
-                lo = mid + 1
-            else:
-                hi = mid
-        out[i] = lo
-        k = min(lo, n - 1) if n else 0
+            at = _bisect_left(s_p, v, max(k - step + 1, 0), hi)
+        out[i] = at
+        k = min(at, n - 1) if n else 0
     return out
