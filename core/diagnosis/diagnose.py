@@ -27,7 +27,7 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    act on them are fitted on, on their calibration half) drop those they show wrong (a
    rapid gap over twice the least and the floor); then one the machine file does not set,
    one whose fit did not run to a bound, the one with the fewest parameters the data moved
-   and the first in EFFECT_PRIORITY are named, in that order.
+   and the first in EFFECT_PRIORITY (then the least held-out gap) are named, in that order.
    Where nothing clears the test on the feed moves, the effects that also act on the rapids
    (an axis's speed or acceleration, a path speed cap) are fitted on alternate rapids and
    one is named by the same test on the other rapids, with the rapids' own floor, unless
@@ -815,20 +815,24 @@ def decide(
         slower = [r for r in pool if r.rapid_gap - least > margin_r]
         if slower:
             by_rapids = [r for r in pool if r not in slower]
-    order = {name: k for k, name in enumerate(EFFECT_PRIORITY)}
+    order = {
+        name: k
+        for k, entry in enumerate(EFFECT_PRIORITY)
+        for name in ((entry,) if isinstance(entry, str) else entry)
+    }
+
     # an effect the machine file already calibrates (``folded``) is the less likely story;
     # an effect that explains anything was at least switched on: one decision even where
     # its fit left every parameter where it started (path compression at its defaults)
-    best = min(
-        by_rapids,
-        key=lambda r: (
+    def story(r: EffectResult) -> tuple[bool, bool, int, int]:
+        return (
             r.name in folded,
             r.name in stretched,
             max(r.moved, 1),
             order.get(r.name, len(order)),
-            r.held_out_gap_after,
-        ),
-    )
+        )
+
+    best = min(by_rapids, key=lambda r: (*story(r), r.held_out_gap_after))
     ranked.remove(best)
     ranked.insert(0, best)
     reason = (
@@ -843,9 +847,12 @@ def decide(
             f"against {best.rapid_gap:.0f})"
         )
     if same:
-        reason += (
-            f"; {', '.join(same)} explain the data as well, {best.name} is the simpler explanation"
+        why_best = (
+            "is the simpler explanation"
+            if any(story(r) != story(best) for r in by_rapids if r is not best)
+            else "leaves the least of the held-out gap"
         )
+        reason += f"; {', '.join(same)} explain the data as well, {best.name} {why_best}"
     return ranked, best.name, reason
 
 
