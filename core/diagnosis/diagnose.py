@@ -19,7 +19,8 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    the noise floor (the machine file's, from ``ncperf calibrate``, else estimated from the
    trace, and never under MIN_FEED_SHARE of F) and by at least BEST_SHARE of the gap (or,
    where it removes most of the gap -- MOST_SHARE -- significantly, by MOST_FLOOR of the
-   floor: no patch for what the model leaves out does that); an effect whose fit left
+   floor: no patch for what the model leaves out does that; or most of it on every one of
+   too few pieces for the test, by FEW_FLOOR of the floor); an effect whose fit left
    every parameter at the machine file's value (a block time of 1.00 ms where the file
    says 1.02) is not named, whatever it removes. Among
    the effects that clear it, those not significantly worse than the best, or leaving a gap
@@ -80,6 +81,8 @@ from core.diagnosis.rules import (
     CLOCK_REGULAR,
     CLOCK_SHARE,
     EFFECT_PRIORITY,
+    FEW_FLOOR,
+    FEW_P,
     GAP_COLOURS,
     GAP_EDGES,
     GAP_LABELS,
@@ -531,7 +534,7 @@ def clears(g_before: float, g_after: float, p: float, floor: float, share: float
     at least the floor, and significantly -- p <= SIG_P, or STRONG_K times the floor where
     it shows in too few places for the test; or CLEAR_SHARE of the gap at p <= CLEAR_P and
     CLEAR_FLOOR of the floor; or MOST_SHARE of the gap at p <= SIG_P and MOST_FLOOR of the
-    floor."""
+    floor, or at p <= FEW_P (every one of five pieces better) and FEW_FLOOR of the floor."""
     gain = g_before - g_after
     if not (g_before > 0 and gain / g_before >= share):
         return False
@@ -541,7 +544,10 @@ def clears(g_before: float, g_after: float, p: float, floor: float, share: float
     if gain / g_before >= CLEAR_SHARE and p <= CLEAR_P and gain >= CLEAR_FLOOR * floor:
         return True
     # most of the gap, significantly: no patch for what the model leaves out does that
-    return gain / g_before >= MOST_SHARE and p <= SIG_P and gain >= MOST_FLOOR * floor
+    if gain / g_before >= MOST_SHARE and p <= SIG_P and gain >= MOST_FLOOR * floor:
+        return True
+    # most of the gap on every one of too few pieces for SIG_P (p = 2^-n): half the floor
+    return gain / g_before >= MOST_SHARE and p <= FEW_P and gain >= FEW_FLOOR * floor
 
 
 def add_effects(
