@@ -128,7 +128,8 @@ EFFECT_PRIORITY: tuple[str | tuple[str, ...], ...] = (
     # in 217 of 218, the filter-first order in 215 -- its misses were 3-5 ms lags. Held out,
     # drawn25 and drawn26: 24 of 24 lags and 18 of 24 filters named; the filter first would
     # have named 23 and 20 -- a 15 ms and a 10 ms filter went to servo_lag, one 5 ms lag
-    # came back: no better, kept as the rule without a preference nobody measured.)
+    # came back: no better and no worse than the fixed order; kept, as neither is the simpler
+    # story.)
     ("jerk_filter", "servo_lag"),
 )
 #: Later effects are added while each removes significantly (SIG_P) at least ADD_SHARE of
