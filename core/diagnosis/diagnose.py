@@ -534,7 +534,7 @@ def clears(g_before: float, g_after: float, p: float, floor: float, share: float
     at least the floor, and significantly -- p <= SIG_P, or STRONG_K times the floor where
     it shows in too few places for the test; or CLEAR_SHARE of the gap at p <= CLEAR_P and
     CLEAR_FLOOR of the floor; or MOST_SHARE of the gap at p <= SIG_P and MOST_FLOOR of the
-    floor, or at p <= FEW_P (every one of five pieces better) and FEW_FLOOR of the floor."""
+    floor, or at p <= FEW_P (the least the test gives on five pieces) and FEW_FLOOR of it."""
     gain = g_before - g_after
     if not (g_before > 0 and gain / g_before >= share):
         return False
@@ -546,7 +546,7 @@ def clears(g_before: float, g_after: float, p: float, floor: float, share: float
     # most of the gap, significantly: no patch for what the model leaves out does that
     if gain / g_before >= MOST_SHARE and p <= SIG_P and gain >= MOST_FLOOR * floor:
         return True
-    # most of the gap on every one of too few pieces for SIG_P (p = 2^-n): half the floor
+    # most of the gap where too few pieces show it for SIG_P (2^-n on n pieces): half the floor
     return gain / g_before >= MOST_SHARE and p <= FEW_P and gain >= FEW_FLOOR * floor
 
 
