@@ -410,12 +410,21 @@ def segment_caps(
     tp: ToolPath, j: NDArray[np.int64], machine: Machine, *block_times: float
 ) -> list[tuple[NDArray, NDArray]]:
     """The top speed of the segments before and after junctions ``j`` (tcGetMaxTargetVel):
-    the programmed feed within min_k Vmax_k / share_k and the path speed limit (a program's
-    F above the machine's runs at the machine's), and the length over one block time: a
-    (before, after) pair per block time of ``block_times`` (s)."""
+    the programmed feed within min_k Vmax_k / share_k (a program's F above the axes' runs at
+    theirs), and the length over one block time: a (before, after) pair per block time of
+    ``block_times`` (s).
+
+    The path speed limit ([TRAJ]MAX_LINEAR_VELOCITY, the planner's vLimit) does not enter:
+    canon gives each segment a maxvel from the axes' speeds alone (emccanon.cc
+    ``getStraightVelocity``), the blend arcs and kinks are planned with it
+    (blendmath.c ``blendParamKinematics``: v_goal from tcGetMaxTargetVel), and vLimit clips
+    only the speed a segment is run at (tp.c ``tpGetRealTargetVel``). A 32 mm/s limit
+    under a free-form path's F2000 (33.3 mm/s) leaves LinuxCNC's blend arcs, and the
+    block-time dips between them, as they were; planned with the limit, the arcs shrank and
+    the dips went (drawn26's freeform_260652, development data)."""
     k = np.concatenate([j, j + 1])
     v = lowest_axis(tp.axis_share, k, np.asarray(machine.max_feed, dtype=np.float64))[0]
-    top = np.fmin(np.fmin(tp.feed[k], v), machine.max_path_feed)
+    top = np.fmin(tp.feed[k], v)
     length = tp.length[k]
     out = []
     for t_block in block_times:

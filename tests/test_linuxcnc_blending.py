@@ -554,3 +554,17 @@ def test_the_blend_plane_acceleration_is_the_inscribed_circle_of_the_axis_limits
     assert expected0 == pytest.approx(2000.0)
     assert a == pytest.approx([expected0, 1087.5, 2000.0, 870.0], rel=1e-12)
     assert axis.tolist() == [1, 2, 0, 2]
+
+
+def test_the_path_speed_limit_does_not_plan_the_blend(nc):
+    """The path speed limit ([TRAJ]MAX_LINEAR_VELOCITY) clips only the speed a segment runs
+    at (tp.c tpGetRealTargetVel); the blend is planned with the segment's own top speed
+    (blendmath.c blendParamKinematics, tcGetMaxTargetVel). The 90 degree turn at F 5 above
+    (R_plan 0.0159155 mm, half the arc 0.0125 mm) stays as it is under a 3 mm/s limit;
+    planned with 3 mm/s it would be s = min(6.95, 3) / 1000 x 3 = 0.009 mm, R_plan =
+    max(3^2 / 2000, 0.009 / (pi / 2)) = 0.0057296 mm."""
+    capped = dataclasses.replace(lcnc(), max_path_feed=3.0)
+    ind = tangential(nc, turn(90.0, feed=5.0), capped)
+    assert ind.values["hold_mm"][0] == pytest.approx(0.0159155, rel=1e-5)
+    assert ind.values["travel_mm"][0] == pytest.approx(0.0125, rel=1e-5)
+    assert ind.feed[0] == pytest.approx(math.sqrt(2000 * 0.0241421), rel=1e-5)

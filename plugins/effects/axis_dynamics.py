@@ -3,12 +3,15 @@
 Parameters: ``accel_scale``, ``jerk_scale`` (0.25-4) and ``feed_scale`` (0.05-4), multiplying
 every axis's acceleration, jerk and maximum feed -- in the corner and curvature limits, the
 blocks' feed limits, the rapids and the ramps alike -- and, on top of them, one factor per
-axis for the acceleration and the feed (``accel_x``... ``feed_z``, 0.2-5): an X axis
-slower than Y and Z is ``accel_x`` alone; the uniform scale is the special case where the
-per-axis factors stay 1. The feed scale reaches further down: an axis speed limit only shows
-once it falls under the programmed feeds, and machine files give axis speeds (rapids)
-several times the cutting feeds. Fitted in two stages: the uniform scales on a grid, then
-each axis's factors one at a time.
+axis for the acceleration (``accel_x``... ``accel_z``, 0.2-5) and the feed (``feed_x``...
+``feed_z``, 0.05-5): an X axis slower than Y and Z is ``accel_x`` alone; the uniform scale
+is the special case where the per-axis factors stay 1. The feed factors reach further down:
+an axis speed limit only shows once it falls under the programmed feeds, and machine files
+give axis speeds (rapids) several times the cutting feeds (an X axis at 46 of
+linuxcnc-sim's 250 mm/s, 0.18, under a free-form path's F2000 slows its rapids, not its
+feed moves: drawn27's freeform_270550, development data, whose X factor stopped at the
+0.2 it had then). Fitted in two stages: the uniform scales on a grid, then each axis's
+factors one at a time.
 """
 
 from __future__ import annotations
@@ -56,7 +59,14 @@ EFFECT = Effect(
         Param("accel_scale", 0.25, 4.0, 1.0, log=True),
         Param("jerk_scale", 0.25, 4.0, 1.0, log=True),
         Param("feed_scale", 0.05, 4.0, 1.0, log=True),
-        *(Param(name, 0.2, 5.0, 1.0, log=True) for name in PER_AXIS),
+        *(Param(name, 0.2, 5.0, 1.0, log=True) for name in PER_AXIS if name.startswith("accel")),
+        # an axis's speed reaches as far down as the uniform feed scale, for the same reason
+        # (below); 15 points keep the 1-D grid's step (x 1.39) of 11 over 0.2-5
+        *(
+            Param(name, 0.05, 5.0, 1.0, log=True, points=15)
+            for name in PER_AXIS
+            if name.startswith("feed")
+        ),
     ),
     apply=_apply,
     doc="per-axis acceleration, jerk and feed limits differ",
