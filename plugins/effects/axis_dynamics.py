@@ -4,7 +4,7 @@ Parameters: ``accel_scale``, ``jerk_scale`` (0.25-4) and ``feed_scale`` (0.05-4)
 every axis's acceleration, jerk and maximum feed -- in the corner and curvature limits, the
 blocks' feed limits, the rapids and the ramps alike -- and, on top of them, one factor per
 axis for the acceleration (``accel_x``... ``accel_z``, 0.2-5) and the feed (``feed_x``...
-``feed_z``, 0.05-5): an X axis slower than Y and Z is ``accel_x`` alone; the uniform scale
+``feed_z``, 0.105-5): an X axis slower than Y and Z is ``accel_x`` alone; the uniform scale
 is the special case where the per-axis factors stay 1. The feed factors reach further down:
 an axis speed limit only shows once it falls under the programmed feeds, and machine files
 give axis speeds (rapids) several times the cutting feeds (an X axis at 46 of
@@ -34,6 +34,9 @@ def _apply(setup, p):
     )
 
 
+#: The per-axis feed factors' lower bound: 0.2 / 25^0.2 (= 0.105).
+FEED_LOW = 0.2 / 25.0**0.2
+
 #: A scale within this share of 1 (log) is unchanged, and scales of the three axes within it
 #: of each other are one uniform scale (when counting an explanation's parameters).
 SAME = 0.02
@@ -60,10 +63,11 @@ EFFECT = Effect(
         Param("jerk_scale", 0.25, 4.0, 1.0, log=True),
         Param("feed_scale", 0.05, 4.0, 1.0, log=True),
         *(Param(name, 0.2, 5.0, 1.0, log=True) for name in PER_AXIS if name.startswith("accel")),
-        # an axis's speed reaches as far down as the uniform feed scale, for the same reason
-        # (below); 15 points keep the 1-D grid's step (x 1.39) of 11 over 0.2-5
+        # an axis's speed reaches further down, for the same reason as the uniform feed
+        # scale (above): two more steps of the 1-D grid of 11 over 0.2-5 (x 25^0.1 = 1.38
+        # each), the same points above 0.2 and two below, 0.145 and 0.105
         *(
-            Param(name, 0.05, 5.0, 1.0, log=True, points=15)
+            Param(name, FEED_LOW, 5.0, 1.0, log=True, points=13)
             for name in PER_AXIS
             if name.startswith("feed")
         ),
