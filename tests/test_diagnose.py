@@ -712,36 +712,6 @@ def test_the_per_axis_search_also_starts_from_the_defaults(nc):
     assert cal_gap(preds, [], "calibration") < 0.2
 
 
-def test_one_axis_speed_reaches_below_a_fifth_of_the_file(nc):
-    """An X axis at 60 of the machine file's 500 mm/s (30 m/min): a factor of 0.12, under
-    the 0.2 the per-axis factors once stopped at. The calibration data sees X's speed and
-    barely the others': gap = 10 |ln(V_x / 60)| + 100 |ln(V_y / 500)| + 100 |ln(V_z / 500)|
-    (mm/s). A uniform scale s costs 10 |ln(500 s / 60)| + 200 |ln s|: least at s = 1; then
-    feed_x alone reaches 0.12 (refined between the grid's 0.105 and 0.145; gap near 0).
-    Stopped at 0.2 it would leave 10 ln(0.2 / 0.12) = 5.11."""
-    from core.diagnosis.fit import fit
-    from core.diagnosis.objective import Objective
-    from core.engine.effects import setup_for
-
-    def cal_gap(preds, data, which):
-        vx, vy, vz = preds[0].setup.machine.max_feed
-        return (
-            10.0 * abs(math.log(vx / 60.0))
-            + 100.0 * abs(math.log(vy / 500.0))
-            + 100.0 * abs(math.log(vz / 500.0))
-        )
-
-    objective = Objective("test", "-", "synthetic", cal_gap, lambda preds, data: (None, None))
-    effects = nc.effects()
-    m = machine(feed=(30.0, 30.0, 30.0))
-    tp = path([{"end": (10, 0, 0)}, {"end": (10, 10, -1)}])
-    base = setup_for(m, effects)
-    params, preds = fit(nc.indicators, [tp], base, effects["axis_dynamics"], [], objective)
-    assert params["feed_scale"] * params["feed_x"] == pytest.approx(0.12, rel=0.02)
-    assert params["feed_scale"] * params["feed_y"] == pytest.approx(1.0, rel=0.01)
-    assert cal_gap(preds, [], "calibration") < 0.2
-
-
 def test_block_time_search_finds_a_narrow_valley(nc):
     """A block time acts through thresholds (a segment's cap L / t_block, LinuxCNC's kink
     test v / T): the gap against t_block can have a valley narrower than the 1-D grid's
