@@ -94,7 +94,7 @@ MOST_FLOOR = 0.25
 #: Re-deciding the stored evidence of drawn14 and drawn16-drawn24 (1260 runs, 340 of the
 #: unchanged machine): 5 more changed settings named rightly (filters of 9-13 ms on polygons
 #: and kinked lines, a 0.026 mm tolerance, an exact stop), nothing on the unchanged runs, no
-#: named effect changed. Held out, drawn25 and drawn26: it named nothing.
+#: named effect changed. Held out, drawn25-drawn27: it named nothing.
 FEW_P = 1.0 / 32.0
 FEW_FLOOR = 0.5
 #: Effects not worse than the best by more than the floor nor significantly (the same test
