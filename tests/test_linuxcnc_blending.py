@@ -568,3 +568,31 @@ def test_the_path_speed_limit_does_not_plan_the_blend(nc):
     assert ind.values["hold_mm"][0] == pytest.approx(0.0159155, rel=1e-5)
     assert ind.values["travel_mm"][0] == pytest.approx(0.0125, rel=1e-5)
     assert ind.feed[0] == pytest.approx(math.sqrt(2000 * 0.0241421), rel=1e-5)
+
+
+def chords(first_deg, turn_deg, length=0.05, feed=100.0, tol=0.01):
+    """Two lines of ``length`` mm in XY, the first at ``first_deg`` from X, the second
+    turned by ``turn_deg``."""
+    a0, a1 = math.radians(first_deg), math.radians(first_deg + turn_deg)
+    p1 = (length * math.cos(a0), length * math.sin(a0), 0.0)
+    p2 = (p1[0] + length * math.cos(a1), p1[1] + length * math.sin(a1), 0.0)
+    return g64([{"end": p1}, {"end": p2}], feed=feed, tol=tol)
+
+
+def test_the_kink_test_adds_the_next_lines_own_acceleration(nc):
+    """tpSetupTangent's a_inst = v_max / T + tc->maxaccel, tc the line being added: its
+    path acceleration from canon (getStraightAcceleration), min_k A_k / |t_k|, above every
+    axis's 2000 off the axes. 0.05 mm chords at F6000 (v_max 0.05 / 0.001 = 50 mm/s):
+    - 45.309 -> 45.614 deg: |t2 - t1| = (0.0037943, 0.0037337), the second line's
+      acceleration 2000 / sin(45.614 deg) = 2798.60; kink 0.0037943 (50000 + 2798.60) /
+      2000 = 0.100167 > 0.1: a corner (with the plane's 2000: 0.098652, tangent);
+    - 45.305 -> 45.0 deg: (0.0037741, 0.0037541), 2000 / sin 45 = 2828.43; kink
+      0.0037741 x 52828.43 / 2000 = 0.099690 < 0.1: tangent.
+    LinuxCNC 2.9 ran both as said (tests/test_linuxcnc_planner_traces.py records them)."""
+    corner = tangential(nc, chords(45.309, 0.305), lcnc())
+    assert corner.values["hold_mm"][0] > 0.0
+    assert corner.feed[0] < INF
+    kink = tangential(nc, chords(45.305, -0.305), lcnc())
+    assert kink.feed[0] == INF
+    assert kink.values["hold_mm"][0] == 0.0
+    assert kink.values["acceleration_share"][0] == pytest.approx(1.0 - 0.099690, abs=2e-6)

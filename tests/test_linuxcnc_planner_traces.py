@@ -155,6 +155,47 @@ def test_nearly_collinear_blocks_run_as_the_segments_linuxcnc_makes(tmp_path):
     assert prof.cycle_time == pytest.approx(measured, rel=0.005)
 
 
+def _diagonal_chords() -> tuple[str, list[int]]:
+    """0.05 mm chords near 45 degrees at F6000 under G64 P0.01 Q0 (each block its own
+    segment), runs of 40 with a turn of 0.309 or 0.305 degrees between runs, and the
+    program lines after the turns. By the kink test with the added line's own acceleration
+    (tests/test_linuxcnc_blending.py) six turns are corners (kink 0.10017-0.10151) and the
+    fourth, from 45.305 back to 45 degrees, is tangent (0.09969); with the plane's 2000
+    mm/s^2 all seven were tangent (0.09813-0.09994)."""
+    lines = ["(0.05 mm chords near 45 deg, turns of 0.309 and 0.305 deg, G64 P0.01 Q0)"]
+    lines += ["G21 G17 G90 G94", "G64 P0.01 Q0", "G0 X0 Y0 Z0", "G1 X0 Y0 Z0 F6000"]
+    x = y = 0.0
+    ang = np.radians(45.0)
+    after = []
+    for run in range(8):
+        for _ in range(40):
+            x, y = x + 0.05 * np.cos(ang), y + 0.05 * np.sin(ang)
+            lines.append(f"G1 X{x:.9f} Y{y:.9f}")
+        after.append(len(lines) + 1)
+        turn = 0.309 if run % 2 == 0 else 0.305
+        ang += np.radians(turn if (run // 2) % 2 == 0 else -turn)
+    lines.append("M2")
+    return "\n".join(lines) + "\n", after[:7]
+
+
+def test_short_diagonal_chords_corner_where_their_kink_says(tmp_path):
+    """At each of the seven turns the lowest speed within three lines is the one LinuxCNC
+    runs: a corner's blend arc leaves half of each 0.05 mm chord, run at 0.025 / 0.00102 =
+    24.51 mm/s; a tangent kink keeps 0.05 / 0.00102 = 49.02 mm/s. Recorded 2026-11-28:
+    24.51 at six turns, 49.02 at the fourth; 0.384 s (predicted 0.383 s; 0.347 s, -9.6 %,
+    with the plane's acceleration in the kink test)."""
+    text, after = _diagonal_chords()
+    tr = record(tmp_path, "diagonal", text)
+    data = np.genfromtxt(tr["csv"], delimiter=",", names=True)
+    s = predicted(tr["prog"]).sample(0.001)
+    for k in after:
+        near = np.abs(tr["line"] - k) <= 3
+        ours = np.abs(s.line - k) <= 3
+        assert s.v[ours].min() == pytest.approx(data["v"][near].min(), abs=0.5), k
+    measured = float(tr["t"][-1] - tr["t"][0])
+    assert s.t[-1] == pytest.approx(measured, rel=0.01)
+
+
 def test_a_servo_period_is_read_off_the_traces_clock(tmp_path):
     """Twelve 2 mm squares at F1200 recorded with a 3 ms servo period: LinuxCNC's sampler
     writes one row per servo period, 3 ms apart, where linuxcnc-sim's traces sample its
