@@ -596,3 +596,32 @@ def test_the_kink_test_adds_the_next_lines_own_acceleration(nc):
     assert kink.feed[0] == INF
     assert kink.values["hold_mm"][0] == 0.0
     assert kink.values["acceleration_share"][0] == pytest.approx(1.0 - 0.099690, abs=2e-6)
+
+
+def test_past_a_reached_limit_the_arc_runs_at_it_to_its_end(nc):
+    """A 5 mm line along X, a 0.2 mm chord turned by 14 deg, a 10 mm line turned by 13 deg
+    more, and 10 mm on: both corners' arcs take half the chord (d = 0.1 mm; the tolerance
+    would allow 0.16 and 0.18), R = 0.1 / tan 7deg = 0.81443 and 0.1 / tan 6.5deg = 0.87769
+    mm, limits sqrt(2000 R) = 40.359 and 41.897 mm/s. From the first arc's end (the chord's
+    middle, 40.359) the speed climbs along the second arc at half the acceleration, 1000
+    mm/s^2: 41.580 after 0.05 mm, the limit 41.897 at the corner. LinuxCNC runs the arc as a
+    segment whose top speed is its limit (tests/test_linuxcnc_planner_traces.py): along its
+    other half, the first 0.1 mm of the line, the speed stays 41.897; then the line's own
+    acceleration, 2000 / cos 27deg = 2244.7 mm/s^2: sqrt(41.897^2 + 2 x 2244.7 x 0.05) =
+    44.495 at 0.15 mm. (Before, the arc's far half was left to climb: 44.34 at 0.1 mm.)"""
+    ang = math.radians(14.0)
+    p1 = (5.0 + 0.2 * math.cos(ang), 0.2 * math.sin(ang), 0.0)
+    ang += math.radians(13.0)
+    p2 = (p1[0] + 10 * math.cos(ang), p1[1] + 10 * math.sin(ang), 0.0)
+    p3 = (p2[0] + 10 * math.cos(ang), p2[1] + 10 * math.sin(ang), 0.0)
+    tp = g64([{"end": (5.0, 0.0, 0.0)}, {"end": p1}, {"end": p2}, {"end": p3}])
+    prof = nc.predict(tp, Setup(machine=lcnc(), ramps=True)).profile
+    corner = 5.2
+    v = prof.speed_at(corner + np.array([-0.1, -0.05, 0.0, 0.05, 0.1, 0.15]))
+    v_a = math.sqrt(2000 * 0.1 / math.tan(math.radians(7)))
+    v_b = math.sqrt(2000 * 0.1 / math.tan(math.radians(6.5)))
+    assert v[0] == pytest.approx(v_a, rel=1e-9)
+    assert v[1] == pytest.approx(math.sqrt(v_a**2 + 2 * 1000 * 0.05), rel=1e-9)
+    assert v[2:5] == pytest.approx([v_b] * 3, rel=1e-9)
+    a_line = 2000 / math.cos(math.radians(27))
+    assert v[5] == pytest.approx(math.sqrt(v_b**2 + 2 * a_line * 0.05), rel=1e-9)

@@ -1713,8 +1713,13 @@ def _blend_holds(
     by 1 - a_blend / a. An arc that is the slowest point around (its speed limit binds and
     the speeds on both sides reach it) is run at that speed, held, as the paper has it; one
     the neighbours keep below its limit is not, so a first pass with those arcs held tells
-    which they are. A rest run as part of an arc is the arc's, straight (ratio 1), held or
-    not with it.
+    which they are. An arc freed so whose limit the speed reaches once the arcs around it are
+    free too keeps its limit along its whole length (LinuxCNC runs it as a segment whose top
+    speed is its limit): its side where the speed beyond is higher is held at it, the other
+    stays free (0.2 mm free-form chords out of a tight spot: 1.9-3.9 mm/s above LinuxCNC's
+    speeds along the arcs' far halves before, within 1.5 now;
+    tests/test_linuxcnc_planner_traces.py). A rest run as part of an arc is the arc's,
+    straight (ratio 1), held or not with it.
     """
     tp = ev.toolpath
     keep = np.ones(tp.n)
@@ -1724,10 +1729,13 @@ def _blend_holds(
             keep = np.clip(np.nan_to_num(1.0 - a_blend / acc, nan=0.0), 0.0, 1.0)
     merged = np.zeros(tp.n) if ev.blend_rest is None else ev.blend_rest
 
-    def holds(free: NDArray) -> tuple[NDArray, NDArray, NDArray]:
+    def holds(free: NDArray, free_after: NDArray | None = None) -> tuple[NDArray, NDArray, NDArray]:
+        # (free: the arcs free on their side before the corner; free_after: after it, the
+        # same where not given)
+        after = free if free_after is None else free_after
         hs, he, re = h_start.copy(), h_end.copy(), r_end.copy()
         he[j[free]] *= keep[j[free]]
-        hs[j[free] + 1] *= keep[j[free] + 1]
+        hs[j[after] + 1] *= keep[j[after] + 1]
         # a rest belongs to the arc at its move's end (junction k for move k): it changes
         # speed where that arc does, and is held with it where the arc is held
         scale = np.ones(tp.n)
@@ -1740,11 +1748,12 @@ def _blend_holds(
         he[k] += rest[k]
         return hs, he, re
 
-    def free_arcs(free: NDArray) -> _FreeArcs | None:
-        if a_blend is None or not free.any():
+    def free_arcs(free: NDArray, free_after: NDArray | None = None) -> _FreeArcs | None:
+        after = free if free_after is None else free_after
+        if a_blend is None or not (free.any() or after.any()):
             return None
         fs, fe = np.zeros(tp.n), np.zeros(tp.n)
-        fs[j[free] + 1] = h_start[j[free] + 1]
+        fs[j[after] + 1] = h_start[j[after] + 1]
         fe[j[free]] = h_end[j[free]] + merged[j[free]]
         return _FreeArcs(fs, fe, np.fmin(acc, a_blend))
 
@@ -1756,7 +1765,20 @@ def _blend_holds(
     v = _passes(caps, np.maximum(tp.length - hs - he, 0.0), acc, acc)
     below = v[j + 1] < ev.junction_feed * (1.0 - TOL.rel_equal)
     free = ~binds | below
-    return (*holds(free), free_arcs(free))
+    freed = binds & below
+    if not freed.any():
+        return (*holds(free), free_arcs(free))
+    # An arc freed so may still reach its limit once its neighbours' arcs are free too: then
+    # the speed may not pass its limit anywhere along it (LinuxCNC runs the arc as a segment
+    # of its own, its limit its top speed), and the side where the speed beyond is higher is
+    # held at the limit -- one side only: the other keeps changing speed along it.
+    hs, he, _ = holds(free)
+    v = _passes(caps, np.maximum(tp.length - hs - he, 0.0), acc, acc)
+    hit = freed & (v[j + 1] >= ev.junction_feed * (1.0 - TOL.rel_equal))
+    lim = ev.junction_feed * (1.0 + TOL.rel_equal)
+    free_before = free & ~(hit & (v[j] > lim))
+    free_after = free & ~(hit & (v[j + 2] > lim))
+    return (*holds(free_before, free_after), free_arcs(free_before, free_after))
 
 
 @dataclass(frozen=True)
