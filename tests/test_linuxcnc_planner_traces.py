@@ -5,8 +5,10 @@ compared with the recorded ones. The cases are the planner's other ways through 
 than a blend arc (plugins/tangential.py, ``linuxcnc_choice``): a line into a helix and out
 of it (no arc: not coplanar), and corners whose blend arc is too short for a 5 ms servo
 period; and the segments LinuxCNC's interpreter makes of nearly collinear blocks under
-G64 P without Q (its naive-CAM detector, adapters/gcode/naivecam.py). Skipped where the
-harness or LinuxCNC is absent (a fresh clone has no ../shared)."""
+G64 P without Q (its naive-CAM detector, adapters/gcode/naivecam.py); the kink test on
+short diagonal chords (the added line's own acceleration) and a blend arc's limit along its
+whole length (free-form chords out of a tight spot). Skipped where the harness or LinuxCNC
+is absent (a fresh clone has no ../shared)."""
 
 from __future__ import annotations
 
@@ -239,9 +241,9 @@ def test_speed_stays_under_a_blend_arcs_limit_along_the_whole_arc(tmp_path):
     """Out of the tight spot (program lines 21-27) each blend arc's limit sqrt(0.866 x 2000
     R) holds along the whole arc (LinuxCNC runs it as a segment of its own, the limit its
     top speed): the speed climbs from arc to arc. Recorded 2026-11-28: top speeds on those
-    lines 38.3, 42.7, 47.7, 51.7, 55.7, 58.7, 61.7 mm/s; ncperf within 1.5 mm/s (before the
-    arc's side beyond a reached limit was held: 1.9-3.9 mm/s above); RMS over time 0.67
-    mm/s (1.26 before); 0.505 s for the recorded 0.510 s (0.503 s before)."""
+    lines 38.3, 42.7, 47.7, 51.7, 55.7, 58.7, 61.7 mm/s; ncperf within 1.5 mm/s (1.9-3.9
+    mm/s above them while an arc's far half was left to climb past its limit); RMS over
+    time 0.67 mm/s (1.26 before); 0.505 s for the recorded 0.510 s (0.503 s before)."""
     text = "(0.2 mm free-form chords through a tight spot, F6000, G64 P0.01 Q0)\n"
     text += "G21 G17 G90 G94\nG64 P0.01 Q0\nG0 X15.0227 Y49.5224 Z0\n"
     text += "G1 X15.0227 Y49.5224 Z0 F6000\n"
