@@ -290,7 +290,7 @@ def plane_acceleration(
 
 
 def _next_acceleration(
-    tp: ToolPath, j: NDArray[np.int64], acc: NDArray, a_plane: NDArray
+    tp: ToolPath, j: NDArray[np.int64], machine: Machine, a_plane: NDArray
 ) -> NDArray:
     """(m,) the acceleration limit of the segment after each junction ``j`` as LinuxCNC's
     kink test adds it (tp.c ``tpSetupTangent``: a_inst = v_max / T + tc->maxaccel, tc the
@@ -302,8 +302,7 @@ def _next_acceleration(
     2828.4: 0.05 mm chords (50 mm/s over one servo period) turning by 0.3 degrees run as
     corners where the plane's 2000 would keep them tangent (LinuxCNC 2.9 traces)."""
     k = j + 1
-    line = lowest_axis(tp.axis_share, k, np.asarray(acc, dtype=np.float64))[0]
-    return np.where(tp.is_arc[k] | ~np.isfinite(line), a_plane, line)
+    return np.where(tp.is_arc[k], a_plane, _path_acceleration(tp, k, machine))
 
 
 def linuxcnc_blends(
@@ -343,7 +342,7 @@ def linuxcnc_blends(
         # plus the acceleration of the segment after (tc->maxaccel: a line's path
         # acceleration min_k A_k / |t_k|, more than the plane's off the axes; an arc's,
         # canon's a_max_axes of its plane, the plane's)
-        a_inst = np.fmin(*kink_caps) / servo + _next_acceleration(tp, j, acc, a_plane)
+        a_inst = np.fmin(*kink_caps) / servo + _next_acceleration(tp, j, machine, a_plane)
         kink = np.max(np.abs(t2 - t1) * (a_inst[:, None] / acc[None, :]), axis=1)
     kink = np.where(tp.is_arc[j] | tp.is_arc[j + 1], kink / LCNC_TANGENTIAL_RATIO, kink)
     tangent = kink < LCNC_KINK_RATIO

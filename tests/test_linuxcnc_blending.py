@@ -33,10 +33,8 @@ def g64(moves, feed=100.0, tol=0.01):
 
 
 def turn(deg, length=10.0, feed=100.0, tol=0.01):
-    """Two lines of ``length`` mm, the second turned by ``deg`` in XY."""
-    b = math.radians(deg)
-    end = (length + length * math.cos(b), length * math.sin(b), 0.0)
-    return g64([{"end": (length, 0.0, 0.0)}, {"end": end}], feed=feed, tol=tol)
+    """Two lines of ``length`` mm, the first along X, the second turned by ``deg`` in XY."""
+    return chords(0.0, deg, length=length, feed=feed, tol=tol)
 
 
 def tangential(nc, tp, m):
