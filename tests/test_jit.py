@@ -253,6 +253,27 @@ def test_sorted_places_are_searchsorteds():
             )
 
 
+def test_lazy_walks_are_pythons(monkeypatch):
+    """LinuxCNC's lazy look-ahead walks (core.engine.lookahead.lazy_walks): random queues of
+    short and long segments, limits that bind and do not, stops among them, blocks of one
+    to three segments, depths and cutoffs small and large."""
+    from core.engine.lookahead import lazy_walks
+
+    rng = np.random.default_rng(11)
+    for trial in range(300):
+        n = int(rng.integers(1, 160))
+        dn = np.where(rng.random(n) < 0.2, rng.uniform(1e3, 1e4, n), rng.uniform(0.0, 300.0, n))
+        lim2 = rng.uniform(0.0, 4e3, n) ** (1.0 if trial % 3 else 0.5) * 10.0
+        tangent = rng.random(n) > 0.05
+        tangent[-1] = False
+        first = np.unique(np.concatenate([[0], rng.integers(0, n, n // 2)])).astype(np.int64)
+        open2 = rng.uniform(0.0, 3e3, first.size)
+        depth, cutoff = (50, 4) if trial % 4 else (int(rng.integers(1, 9)), int(rng.integers(0, 6)))
+        _same(
+            *_both(monkeypatch, partial(lazy_walks, dn, lim2, tangent, first, open2, depth, cutoff))
+        )
+
+
 def test_no_jit_switch(monkeypatch):
     for value, off in (("1", True), ("yes", True), ("0", False), ("", False)):
         monkeypatch.setenv(NO_JIT_ENV, value)

@@ -55,6 +55,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
+from core.engine.lookahead import lazy_caps
 from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
 from core.model.jit import compiled
@@ -1952,6 +1953,13 @@ def build_profile(
         tp.release_derived()  # the junctions too, once the caps have them
     length = tp.length
     h_start, h_end, r_start, r_end = _holds(ev)
+    if along_blends > 0.0 and m.corner_blending == "linuxcnc":
+        # the final speeds LinuxCNC's lazy look-ahead leaves lowered (core.engine.lookahead)
+        lazy = lazy_caps(
+            length, cap, b, acc, a_blend, h_start, h_end, r_start, r_end, ev.blend_rest
+        )
+        np.minimum(b, lazy, out=b)
+        del lazy
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
     free_arcs: _FreeArcs | None = None
     if along_blends > 0.0 or ev.blend_rest is not None:
