@@ -274,6 +274,18 @@ def test_lazy_walks_are_pythons(monkeypatch):
         )
 
 
+def test_long_loops_take_the_kernels_unasked(monkeypatch):
+    """compiled_for: without the diagnosis's leave, the kernels only for a loop of at least
+    WORTH_LOADING steps, and never where NCPERF_NO_JIT is set."""
+    from core.model import jit
+
+    monkeypatch.setattr(jit, "_allowed", [False])
+    assert jit.compiled_for(jit.WORTH_LOADING - 1) is None
+    assert jit.compiled_for(jit.WORTH_LOADING) is not None
+    monkeypatch.setenv(NO_JIT_ENV, "1")
+    assert jit.compiled_for(jit.WORTH_LOADING) is None
+
+
 def test_no_jit_switch(monkeypatch):
     for value, off in (("1", True), ("yes", True), ("0", False), ("", False)):
         monkeypatch.setenv(NO_JIT_ENV, value)

@@ -36,7 +36,7 @@ from __future__ import annotations
 import numpy as np
 from numpy.typing import NDArray
 
-from core.model.jit import compiled
+from core.model.jit import compiled_for
 
 #: LinuxCNC 2.9: ``[TRAJ] ARC_BLEND_OPTIMIZATION_DEPTH`` (default 50, the walk's steps; ini
 #: and milltask defaults) and tp.c ``TP_OPTIMIZATION_CUTOFF`` (a walk stops once it has
@@ -67,9 +67,10 @@ def lazy_walks(
     the queue's last. After the last block the program's end is a stop: one more walk. The
     walk of tp.c ``tpRunOptimization`` step by step (see the module docstring); the compiled
     kernel (:func:`core.model.compiled.lazy_walks`) does the same operations in the same
-    order.
+    order (used where the diagnosis allows the kernels, and on queues long enough that
+    numba's start-up costs less than this loop: core.model.jit.compiled_for).
     """
-    kernels = compiled()
+    kernels = compiled_for(dn.size)
     fv2 = np.full(dn.size, np.inf)
     if dn.size == 0:
         return fv2

@@ -60,3 +60,21 @@ def compiled() -> ModuleType | None:
     if not _allowed[0] or disabled():
         return None
     return _load()
+
+
+#: Python steps above which a loop that has a kernel takes the kernels even where the
+#: diagnosis did not ask for them: LinuxCNC's lazy look-ahead walks
+#: (core.engine.lookahead) take about 4.5 us a segment in Python (99k segments of a chord
+#: raster: 0.45 s), numba's start-up with the cached kernel about as long (0.46-0.64 s for
+#: the same queue, measured while another job ran): the kernels pay from about 150k on.
+WORTH_LOADING = 150_000
+
+
+def compiled_for(steps: int) -> ModuleType | None:
+    """:func:`compiled`, and also the kernels (numba installed, ``NCPERF_NO_JIT`` not set)
+    for a loop of at least :data:`WORTH_LOADING` steps, whose Python would cost more than
+    loading them. The kernels give the same bits, so only the time depends on which runs."""
+    kernels = compiled()
+    if kernels is not None or disabled() or steps < WORTH_LOADING:
+        return kernels
+    return _load()
