@@ -6,8 +6,9 @@ than a blend arc (plugins/tangential.py, ``linuxcnc_choice``): a line into a hel
 of it (no arc: not coplanar), and corners whose blend arc is too short for a 5 ms servo
 period; and the segments LinuxCNC's interpreter makes of nearly collinear blocks under
 G64 P without Q (its naive-CAM detector, adapters/gcode/naivecam.py); the kink test on
-short diagonal chords (the added line's own acceleration) and a blend arc's limit along its
-whole length (free-form chords out of a tight spot). Skipped where the harness or LinuxCNC
+short diagonal chords (the added line's own acceleration), a blend arc's limit along its
+whole length (free-form chords out of a tight spot) and the speeds the lazy look-ahead
+leaves lowered on chords before a long line. Skipped where the harness or LinuxCNC
 is absent (a fresh clone has no ../shared)."""
 
 from __future__ import annotations
@@ -278,3 +279,26 @@ def test_a_servo_period_is_read_off_the_traces_clock(tmp_path):
     assert d.chosen_params["block_cycle_time"]["t_block"] == pytest.approx(0.00306, rel=1e-6)
     assert d.clock is not None
     assert d.clock.held_out_gap_after <= d.clock.held_out_gap_before + d.floor
+
+
+def test_chords_slow_down_before_a_long_line_where_the_lazy_look_ahead_left_them(tmp_path):
+    """Runs of 0.06 mm chords into a 1.2, 2.4 and 1.2 mm line, each ending in a 90 degree
+    corner (tests/test_linuxcnc_lookahead.py): LinuxCNC's lazy walks leave the chords five
+    and more before each long line at sqrt(a L / 2 + 2 a_t l ...) (core.engine.lookahead).
+    Recorded 2026-11-28 (a study program of the same shape): lowest speeds 42.56, 54.81 and
+    42.37 mm/s in the lines before the long lines, where ncperf now gives 43.00, 55.16 and
+    43.01 (58.82, the chords' limit, before); RMS over time 1.19 mm/s (9.48 before); 0.679 s
+    for the recorded 0.681 s (0.668 s before)."""
+    from tests.test_linuxcnc_lookahead import LONG_LINES, _program
+
+    tr = record(tmp_path, "lazy", _program())
+    data = np.genfromtxt(tr["csv"], delimiter=",", names=True)
+    s = predicted(tr["prog"]).sample(0.001)
+    for long, back, _ in LONG_LINES:
+        near = (tr["line"] >= long - back) & (tr["line"] < long)
+        ours = (s.line >= long - back) & (s.line < long)
+        assert s.v[ours].min() == pytest.approx(data["v"][near].min(), abs=1.0), long
+    t = np.arange(0.0, min(tr["t"][-1] - tr["t"][0], s.t[-1]), 0.001)
+    measured = np.interp(t, tr["t"] - tr["t"][0], data["v"])
+    assert np.sqrt(np.mean((np.interp(t, s.t, s.v) - measured) ** 2)) < 2.0
+    assert s.t[-1] == pytest.approx(float(tr["t"][-1] - tr["t"][0]), rel=0.01)
