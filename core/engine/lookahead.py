@@ -148,41 +148,48 @@ def lazy_caps(
     rest = np.zeros(n) if rest is None else rest
     arc = np.zeros(n, dtype=bool)
     arc[:-1] = h_end[:-1] > 0
-    arc_len = np.zeros(n)
-    arc_len[:-1] = r_end[:-1] * h_end[:-1] + r_start[1:] * h_start[1:] + rest[:-1]
-    inner = length - h_start - h_end
+    inner = length - h_start
+    inner -= h_end
     own = (inner > 0) & ~((rest > 0) & arc)
     own |= ~arc & ~(h_start > 0)  # (a block with neither: itself, whatever its length)
-    count = own.astype(np.int64) + arc
     first = np.zeros(n, dtype=np.int64)
-    np.cumsum(count[:-1], out=first[1:])
-    total = int(first[-1] + count[-1])
-    i_own = first[own]  # the segments' indices
-    i_arc = first[arc] + own[arc]
-    k_own = np.flatnonzero(own)
+    np.cumsum((own + arc.astype(np.int64))[:-1], out=first[1:])
+    total = int(first[-1]) + int(own[-1]) + int(arc[-1])
+    k_own = np.flatnonzero(own)  # the blocks with each kind of segment
     k_arc = np.flatnonzero(arc)
+    i_own = first[k_own]  # and the segments' indices
+    i_arc = first[k_arc] + own[k_arc]
+    # what ends at a corner without an arc (among the blocks' own segments)
+    ends = ~arc[k_own]
     vmax = np.empty(total)
-    dn = np.empty(total)
-    vmax[i_own] = cap[own]
-    dn[i_own] = 2.0 * acc[own] * np.maximum(inner[own], 0.0)
+    vmax[i_own] = cap[k_own]
     vmax[i_arc] = b[k_arc + 1]
-    dn[i_arc] = 2.0 * np.minimum(a_blend[k_arc], a_blend[k_arc + 1]) * arc_len[arc]
-    lim = np.empty(total)
-    lim[:-1] = np.minimum(vmax[:-1], vmax[1:])
-    lim[-1] = vmax[-1]
-    # what ends at a corner without an arc: the corner's cap (a kink's speed, a stop)
-    end_own = own & ~arc
-    lim[i_own[end_own[own]]] = np.minimum(lim[i_own[end_own[own]]], b[k_own[end_own[own]] + 1])
-    tangent = lim > 0
+    lim2 = np.empty(total)
+    np.minimum(vmax[:-1], vmax[1:], out=lim2[:-1])
+    lim2[-1] = vmax[-1]
+    del vmax
+    # ... whose limit is also the corner's cap (a kink's speed, a stop)
+    lim2[i_own[ends]] = np.minimum(lim2[i_own[ends]], b[k_own[ends] + 1])
+    tangent = lim2 > 0
     tangent[-1] = False
+    lim2 *= lim2
+    dn = np.empty(total)
+    dn[i_own] = 2.0 * acc[k_own] * np.maximum(inner[k_own], 0.0)
+    del inner
+    # an arc: the travel on both sides and the rest it runs, at the lower a_blend of its blocks
+    arc_len = r_end[k_arc] * h_end[k_arc] + r_start[k_arc + 1] * h_start[k_arc + 1]
+    arc_len += rest[k_arc]
+    dn[i_arc] = 2.0 * np.minimum(a_blend[k_arc], a_blend[k_arc + 1]) * arc_len
+    del arc_len
     # a block while it is the queue's last: from its start (trimmed by the arc before it)
     open2 = OPEN_SHARE * acc * (length - h_start)
-    fv2 = lazy_walks(dn, lim * lim, tangent, first, open2)
+    fv2 = lazy_walks(dn, lim2, tangent, first, open2)
+    del lim2, tangent, first, open2
     # the corners: inside an arc the speed that still reaches the arc's final one over its
     # second half; else the final speed of what ends there
     v2 = np.full(n, np.inf)
     v2[k_arc] = fv2[i_arc] + 0.5 * dn[i_arc]
-    v2[k_own[end_own[own]]] = fv2[i_own[end_own[own]]]
+    v2[k_own[ends]] = fv2[i_own[ends]]
     out[1:] = np.sqrt(v2)
     out[-1] = np.inf
     return out
