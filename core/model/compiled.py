@@ -1,4 +1,5 @@
-"""Compiled (numba) kernels of the diagnosis's hottest loops, element by element.
+"""Compiled (numba) kernels of the diagnosis's hottest loops (and LinuxCNC's look-ahead
+walks), element by element.
 
 Imported only through :func:`core.model.jit.compiled` (allowed by the diagnosis, numba
 installed, ``NCPERF_NO_JIT`` not set). Every kernel does, for each element, the same
