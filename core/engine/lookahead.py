@@ -33,6 +33,10 @@ look-ahead gives where a walk stopped early; the passes keep every speed consist
 
 from __future__ import annotations
 
+from collections.abc import Callable
+from functools import cache
+from types import ModuleType
+
 import numpy as np
 from numpy.typing import NDArray
 
@@ -65,34 +69,51 @@ def lazy_walks(
     the other; ``first[k]`` is the index of block k's first segment (the segments before it
     are final when it joins), ``open2[k]`` the squared triangle peak of block k while it is
     the queue's last. After the last block the program's end is a stop: one more walk. The
-    walk of tp.c ``tpRunOptimization`` step by step (see the module docstring); the compiled
-    kernel (:func:`core.model.compiled.lazy_walks`) does the same operations in the same
-    order (used where the diagnosis allows the kernels, and on queues long enough that
-    numba's start-up costs less than this loop: core.model.jit.compiled_for).
+    walk of tp.c ``tpRunOptimization`` step by step (see the module docstring; :func:`walks`),
+    compiled by numba (:func:`_compiled`, the same function) where the diagnosis allows
+    the kernels and on queues long enough that numba's start-up costs less than the Python
+    loop (core.model.jit.compiled_for).
     """
     kernels = compiled_for(dn.size)
     fv2 = np.full(dn.size, np.inf)
     if dn.size == 0:
         return fv2
     if kernels is not None:
-        kernels.lazy_walks(dn, lim2, tangent, first, open2, depth, cutoff, fv2)
+        _compiled(kernels)(
+            dn, lim2, tangent, first, open2, depth, cutoff, fv2, np.zeros(dn.size, dtype=np.bool_)
+        )
         return fv2
     # plain Python over lists: a float list's items are Python floats (no boxing per read)
-    d, lim, tan = dn.tolist(), lim2.tolist(), tangent.tolist()
-    starts, opens = first.tolist(), open2.tolist()
     fv = fv2.tolist()
-    at_max = [False] * dn.size
-    n_seg = dn.size
-    for k in range(len(starts) + 1):
+    walks(
+        dn.tolist(),
+        lim2.tolist(),
+        tangent.tolist(),
+        first.tolist(),
+        open2.tolist(),
+        depth,
+        cutoff,
+        fv,
+        [False] * dn.size,
+    )
+    return np.array(fv, dtype=np.float64)
+
+
+def walks(dn, lim2, tangent, first, open2, depth, cutoff, fv, at_max) -> None:
+    """:func:`lazy_walks`' steps into ``fv`` (and the marks ``at_max``, all False at first),
+    over lists (Python) or arrays (compiled by numba: :func:`_compiled`)."""
+    n_seg = len(dn)
+    n_blocks = len(first)
+    for k in range(n_blocks + 1):
         # block k joins (k = K: the program's end, a stop after the last segment)
-        last = (starts[k] if k < len(starts) else n_seg) - 1
+        last = (first[k] if k < n_blocks else n_seg) - 1
         hit = 0
         skipped = False
         for x in range(1, depth + 2):
             pv = last + 1 - x  # the segment whose final speed this step sets
             if pv < 0:
                 break
-            if not tan[pv]:
+            if not tangent[pv]:
                 if skipped:
                     break
                 skipped = True
@@ -102,19 +123,25 @@ def lazy_walks(
             if x == 1:
                 # the new block (not final): the triangle over it, within the limit (at the
                 # program's end the last segment is a stop: skipped above)
-                o = opens[k]
-                fv[pv] = o if o < lim[pv] else lim[pv]
+                o = open2[k]
+                fv[pv] = o if o < lim2[pv] else lim2[pv]
                 continue
-            vs = fv[tc] + d[tc]
-            if vs >= lim[pv]:
-                vs = lim[pv]
+            vs = fv[tc] + dn[tc]
+            if vs >= lim2[pv]:
+                vs = lim2[pv]
                 at_max[pv] = True
             fv[pv] = vs
             if at_max[tc]:
                 hit += 1
                 if hit > cutoff:
                     break
-    return np.array(fv, dtype=np.float64)
+
+
+@cache
+def _compiled(kernels: ModuleType) -> Callable[..., None]:
+    """:func:`walks` compiled with the kernels' settings (``kernels.kernel``: numba's njit,
+    cached on disk, numpy's float rules; :mod:`core.model.compiled`), once per process."""
+    return kernels.kernel(walks)
 
 
 def lazy_caps(

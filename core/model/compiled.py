@@ -1,5 +1,5 @@
-"""Compiled (numba) kernels of the diagnosis's hottest loops (and LinuxCNC's look-ahead
-walks), element by element.
+"""Compiled (numba) kernels of the diagnosis's hottest loops, element by element (and
+``kernel``, their settings, with which core.engine.lookahead compiles LinuxCNC's walks).
 
 Imported only through :func:`core.model.jit.compiled` (allowed by the diagnosis, numba
 installed, ``NCPERF_NO_JIT`` not set). Every kernel does, for each element, the same
@@ -997,49 +997,3 @@ def sorted_places(s_p: np.ndarray, x: np.ndarray) -> np.ndarray:
         out[i] = at
         k = min(at, n - 1) if n else 0
     return out
-
-
-@kernel
-def lazy_walks(
-    dn: np.ndarray,
-    lim2: np.ndarray,
-    tangent: np.ndarray,
-    first: np.ndarray,
-    open2: np.ndarray,
-    depth: int,
-    cutoff: int,
-    fv: np.ndarray,
-) -> None:
-    """core.engine.lookahead.lazy_walks into ``fv`` (inf where no walk set it): the same
-    steps, comparisons and sums in the same order."""
-    n_seg = dn.size
-    n_blocks = first.size
-    at_max = np.zeros(n_seg, dtype=np.bool_)
-    for k in range(n_blocks + 1):
-        last = (first[k] if k < n_blocks else n_seg) - 1
-        hit = 0
-        skipped = False
-        for x in range(1, depth + 2):
-            pv = last + 1 - x
-            if pv < 0:
-                break
-            if not tangent[pv]:
-                if skipped:
-                    break
-                skipped = True
-                fv[pv] = 0.0
-                continue
-            tc = pv + 1
-            if x == 1:
-                o = open2[k]
-                fv[pv] = o if o < lim2[pv] else lim2[pv]
-                continue
-            vs = fv[tc] + dn[tc]
-            if vs >= lim2[pv]:
-                vs = lim2[pv]
-                at_max[pv] = True
-            fv[pv] = vs
-            if at_max[tc]:
-                hit += 1
-                if hit > cutoff:
-                    break
