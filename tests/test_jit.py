@@ -40,6 +40,10 @@ def _same(a: object, b: object) -> None:
     elif isinstance(a, np.ndarray):
         assert isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape
         np.testing.assert_array_equal(_bits(a), _bits(b))
+    elif dataclasses.is_dataclass(a):  # (Profile.arc_ramps)
+        assert type(a) is type(b)
+        for f in dataclasses.fields(a):
+            _same(getattr(a, f.name), getattr(b, f.name))
     else:
         assert a == b
 

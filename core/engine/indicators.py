@@ -150,6 +150,11 @@ class Evaluation:
         segments' acceleration at a parabolic blend and takes the kink ratio off at a
         tangent kink), times an element indicator's ``acceleration_share`` (LinuxCNC's share
         on each arc); None: every move keeps all of it.
+    junction_arc_feed : (m,) float, mm/s, or None
+        ``corner_blending = "linuxcnc"``: the lowest indicator feed at each junction before
+        the programmed feeds cap it -- the limit of the arc LinuxCNC inserts there, which it
+        runs up to whatever the feeds on either side (the arc's requested speed is the
+        higher of the two: blendmath.c ``blendParamKinematics``); None elsewhere.
     """
 
     toolpath: ToolPath
@@ -169,6 +174,7 @@ class Evaluation:
     junction_travel: NDArray[np.float64]
     blend_rest: NDArray[np.float64] | None = None
     acceleration_share: NDArray[np.float64] | None = None
+    junction_arc_feed: NDArray[np.float64] | None = None
 
     @cached_property
     def junction_reduction(self) -> NDArray[np.float64]:
@@ -385,9 +391,10 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
     jprog = np.fmin(tp.feed[j], tp.feed[j + 1])
     not_below = ~(jfeed < jprog)
     jlim = np.where(not_below, 0, jlim)
+    keep_all = machine.corner_blending == "linuxcnc"
+    arc_feed = jfeed.copy() if keep_all else None
     jfeed = np.fmin(jfeed, jprog)
 
-    keep_all = machine.corner_blending == "linuxcnc"
     blend_rest = None
     for ind in indicators:
         if ind.name == BLEND_INDICATOR and "merged_mm" in ind.values:
@@ -437,4 +444,5 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         junction_travel=jhold[1] if keep_all else np.where(not_below, 0.0, jhold[1]),
         blend_rest=blend_rest,
         acceleration_share=acc_share,
+        junction_arc_feed=arc_feed,
     )

@@ -472,6 +472,9 @@ class Profile:
         (:mod:`core.engine.rotary`); None: the dwells alone.
     lead : float, s
         Time at rest before the first move (rotary axes turning).
+    arc_ramps : ArcRamps or None
+        Holds whose speed changes along them (LinuxCNC's blend arcs between blocks of
+        different feeds); None: every hold runs at its move's entry or exit speed.
     """
 
     evaluation: Evaluation
@@ -489,6 +492,7 @@ class Profile:
     ramps: tuple[NDArray, ...] | None = None
     pause: NDArray[np.float64] | None = None
     lead: float = 0.0
+    arc_ramps: ArcRamps | None = None
 
     @property
     def toolpath(self) -> ToolPath:
@@ -538,6 +542,12 @@ class Profile:
     def hold_times_of(self, k: NDArray[np.int64] | slice) -> tuple[NDArray, NDArray]:
         """:attr:`hold_times` of the moves ``k`` only."""
         hs, he = self.hold_start[k], self.hold_end[k]
+        ar = self.arc_ramps
+        if ar is not None:
+            run0, run1 = self.hold_start_ratio[k] * hs, self.hold_end_ratio[k] * he
+            t0 = ramped_hold_time(run0, ar.start[k], self.v_entry[k], ar.a_start[k])
+            t1 = ramped_hold_time(run1, self.v_exit[k], ar.end[k], ar.a_end[k])
+            return np.where(hs > 0, t0, 0.0), np.where(he > 0, t1, 0.0)
         with np.errstate(divide="ignore", invalid="ignore"):
             h0 = np.where(hs > 0, self.hold_start_ratio[k] * hs / self.v_entry[k], 0.0)
             h1 = np.where(he > 0, self.hold_end_ratio[k] * he / self.v_exit[k], 0.0)
@@ -556,6 +566,37 @@ class Profile:
         s = np.asarray(s, dtype=np.float64)
         if s.ndim != 1:
             return self.speed_at(s.reshape(-1)).reshape(s.shape)
+        if self.arc_ramps is not None:
+            return self._in_ramped_holds(s, self._speed_at(s))
+        return self._speed_at(s)
+
+    def _in_ramped_holds(self, s: NDArray, v: NDArray) -> NDArray[np.float64]:
+        """The speeds ``v`` at arc lengths ``s`` with those in holds whose speed changes
+        along them (:attr:`arc_ramps`) made again."""
+        ar = self.arc_ramps
+        assert ar is not None
+        tp = self.toolpath
+        k = tp.move_at(s)
+        d = np.clip(s - tp.start_s[k], 0.0, tp.length[k])
+        h0, h1 = self.hold_start[k], self.hold_end[k]
+        for start in (True, False):
+            if start:
+                sel = np.flatnonzero((d < h0) & (ar.start[k] != self.v_entry[k]))
+                kk = k[sel]
+                r, h, into = self.hold_start_ratio[kk], h0[sel], d[sel]
+                va, vb, acc_h = ar.start[kk], self.v_entry[kk], ar.a_start[kk]
+            else:
+                past = tp.length[k] - h1  # where the end hold begins
+                sel = np.flatnonzero((d > past) & (h1 > 0) & (ar.end[k] != self.v_exit[k]))
+                kk = k[sel]
+                r, h, into = self.hold_end_ratio[kk], h1[sel], d[sel] - past[sel]
+                va, vb, acc_h = self.v_exit[kk], ar.end[kk], ar.a_end[kk]
+            if sel.size:
+                v[sel] = ramped_hold_speed(r * into, r * h, va, vb, acc_h)
+        return v
+
+    def _speed_at(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
+        """:meth:`speed_at` of a 1-D ``s``, every hold at its move's entry or exit speed."""
         tp = self.toolpath
         kernels = compiled()
         if kernels is not None:  # the same operations element by element (core.model.jit)
@@ -654,14 +695,32 @@ class Profile:
         with np.errstate(divide="ignore", invalid="ignore"):
             in_hold0 = np.where(r0 > 0, v0 * tau / r0, h0)
             in_hold1 = np.where(r1 > 0, v1 * th / r1, self.hold_end[k])
-        d = np.where(
-            in_h0, in_hold0, h0 + d_ramps + np.where(in_h0 | in_up | in_cr | in_dn, 0.0, in_hold1)
-        )
+        in_h1 = ~(in_h0 | in_up | in_cr | in_dn)
         v = np.where(
             in_h0,
             v0,
             np.where(in_up, v0 + au * tr, np.where(in_cr, vp, np.where(in_dn, vp - ad * td, v1))),
         )
+        ar = self.arc_ramps
+        if ar is not None:  # holds whose speed changes along them: their travel and speed
+            for start in (True, False):
+                if start:
+                    sel = np.flatnonzero(in_h0 & (ar.start[k] != v0))
+                    kk = k[sel]
+                    va, vb, acc_h = ar.start[kk], v0[sel], ar.a_start[kk]
+                    h, r, tt = h0[sel], r0[sel], tau[sel]
+                else:
+                    sel = np.flatnonzero(in_h1 & (ar.end[k] != v1))
+                    kk = k[sel]
+                    va, vb, acc_h = v1[sel], ar.end[kk], ar.a_end[kk]
+                    h, r, tt = self.hold_end[kk], r1[sel], th[sel]
+                if sel.size == 0:
+                    continue
+                x, v[sel] = ramped_hold_motion(tt, r * h, va, vb, acc_h)
+                with np.errstate(divide="ignore", invalid="ignore"):
+                    prog = np.where(r > 0, x / r, h)
+                (in_hold0 if start else in_hold1)[sel] = prog
+        d = np.where(in_h0, in_hold0, h0 + d_ramps + np.where(in_h1, in_hold1, 0.0))
         d = np.clip(d, 0.0, tp.length[k])
         if self.ramps is not None:
             # Inside jerk-limited ramps: the S curve at the same share of the ramp's time;
@@ -920,7 +979,11 @@ def _moves(v: NDArray, cap: NDArray, a_up: NDArray, a_dn: NDArray, holds: _Holds
 
 def _move_piece(v, cap, a_up, a_dn, length, t_hold):
     """:func:`_moves` of consecutive moves: peak speed, cruise length, time."""
-    v0, v1 = v[:-1], v[1:]
+    return _piece(v[:-1], v[1:], cap, a_up, a_dn, length, t_hold)
+
+
+def _piece(v0, v1, cap, a_up, a_dn, length, t_hold):
+    """:func:`_move_piece` of moves given by their entry and exit speeds."""
     v0sq = v0 * v0  # v**2 of a float64 array is v * v
     v1sq = v1 * v1
     with np.errstate(divide="ignore", invalid="ignore"):
@@ -1704,10 +1767,13 @@ def _blend_holds(
     h_start: NDArray,
     h_end: NDArray,
     r_end: NDArray,
+    held: NDArray | None = None,
 ) -> tuple[NDArray, NDArray, NDArray, _FreeArcs | None]:
     """The holds of a planner that changes speed along its blend arcs at ``a_blend`` (None:
     held, as the paper has it), with the rests it runs as part of the next arc
     (``Evaluation.blend_rest``); and the arcs the speed changes along (None: none).
+    ``held``: junctions whose arc stays held whatever the rest says (:func:`_arc_ramps`
+    runs them).
 
     Along an arc the speed may change at a_blend instead of the move's acceleration: the
     ramps get the same reach (a (L - holds) + a_blend holds) when the holds they skip shrink
@@ -1759,6 +1825,8 @@ def _blend_holds(
         return _FreeArcs(fs, fe, np.fmin(acc, a_blend))
 
     binds = ev.junction_feed < np.minimum(cap[j], cap[j + 1]) * (1.0 - TOL.rel_equal)
+    if held is not None:
+        binds = binds | held
     if a_blend is None or not binds.any():
         # (without a_blend nothing is scaled: keep is 1)
         return (*holds(~binds), free_arcs(~binds))
@@ -1766,7 +1834,11 @@ def _blend_holds(
     v = _passes(caps, np.maximum(tp.length - hs - he, 0.0), acc, acc)
     below = v[j + 1] < ev.junction_feed * (1.0 - TOL.rel_equal)
     free = ~binds | below
+    if held is not None:
+        free &= ~held
     freed = binds & below
+    if held is not None:
+        freed &= ~held
     if not freed.any():
         return (*holds(free), free_arcs(free))
     # An arc freed so may still reach its limit once its neighbours' arcs are free too: then
@@ -1791,6 +1863,165 @@ class _FreeArcs:
     start: NDArray
     end: NDArray
     a_blend: NDArray
+
+
+@dataclass(frozen=True)
+class ArcRamps:
+    """Holds whose speed changes along them: LinuxCNC's blend arcs between blocks of
+    different feeds (:func:`_arc_ramps`). Per move, the speed at the corner end of its start
+    hold (``start``: where the move begins) and of its end hold (``end``: where it ends),
+    and the acceleration along each (``a_start``, ``a_end``, mm/s^2). A hold runs between
+    that speed and its move's entry (exit) speed, the speed changing at its low end at that
+    acceleration, then flat at the high one; where the two are equal it is flat, as every
+    hold of a profile without them."""
+
+    start: NDArray[np.float64]
+    end: NDArray[np.float64]
+    a_start: NDArray[np.float64]
+    a_end: NDArray[np.float64]
+
+
+def _ramp_shape(run, va, vb, a):
+    """Low and high speed of a hold of ``run`` mm run from ``va`` to ``vb`` changing at
+    ``a`` at its low end, the length of that change (at most ``run``) and the speed it
+    reaches (the high one, but for rounding)."""
+    lo, hi = np.minimum(va, vb), np.maximum(va, vb)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        d_r = np.minimum(np.nan_to_num((hi * hi - lo * lo) / (2.0 * a), nan=0.0), run)
+    top = np.minimum(np.sqrt(lo * lo + 2.0 * a * d_r), hi)
+    return lo, hi, d_r, top
+
+
+def ramped_hold_time(run, va, vb, a) -> NDArray[np.float64]:
+    """Time (s) of holds of ``run`` mm of travel run from speed ``va`` to ``vb`` (in the
+    order they are run), the speed changing at ``a`` at the low end, flat at the high one
+    (``va == vb``: ``run / va``); 0 where a hold would run at speed 0."""
+    lo, hi, d_r, top = _ramp_shape(run, va, vb, a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t = (top - lo) / a + (run - d_r) / hi
+    return nan_to_num(t, nan=0.0, posinf=0.0)
+
+
+def ramped_hold_speed(x, run, va, vb, a) -> NDArray[np.float64]:
+    """Speed (mm/s) ``x`` mm into holds of :func:`ramped_hold_time`."""
+    lo, hi, d_r, top = _ramp_shape(run, va, vb, a)
+    from_low = np.where(va <= vb, x, run - x)
+    return np.minimum(np.sqrt(lo * lo + 2.0 * a * np.clip(from_low, 0.0, d_r)), top)
+
+
+def ramped_hold_motion(tau, run, va, vb, a) -> tuple[NDArray, NDArray]:
+    """Travel (mm) and speed (mm/s) ``tau`` s into holds of :func:`ramped_hold_time`."""
+    lo, hi, d_r, top = _ramp_shape(run, va, vb, a)
+    with np.errstate(divide="ignore", invalid="ignore"):
+        t_r = nan_to_num((top - lo) / a, nan=0.0, posinf=0.0)
+        t_f = nan_to_num((run - d_r) / hi, nan=0.0, posinf=0.0)
+    rising = va <= vb
+    # rising: the change, then flat; falling: flat, then the change
+    tc = np.clip(np.where(rising, tau, tau - t_f), 0.0, t_r)
+    flat = np.where(rising, np.maximum(tau - t_r, 0.0), np.minimum(tau, t_f))
+    x = np.where(
+        rising,
+        lo * tc + 0.5 * a * tc * tc + hi * flat,
+        hi * flat + top * tc - 0.5 * a * tc * tc,
+    )
+    v = np.where(
+        rising, np.where(tau < t_r, lo + a * tc, hi), np.where(tau < t_f, hi, top - a * tc)
+    )
+    return np.minimum(x, run), v
+
+
+def _ramped_sides(ev: Evaluation, cap: NDArray) -> tuple[NDArray, NDArray] | None:
+    """Per junction, whether LinuxCNC's blend arc there runs between two caps and above the
+    lower (:func:`_arc_ramps`): the slower block before the corner (``rising``) or after it
+    (``falling``); None where the planner inserts no such arcs."""
+    arc_v = ev.junction_arc_feed
+    if arc_v is None:
+        return None
+    tp = ev.toolpath
+    j = ev.junction
+    c0, c1 = cap[j], cap[j + 1]
+    arc = (ev.junction_hold > 0) & (ev.junction_travel > 0) & tp.is_feed[j] & tp.is_feed[j + 1]
+    arc &= arc_v > np.fmin(c0, c1) * (1.0 + TOL.rel_equal)
+    # programmed feeds that differ (caps that differ for other reasons -- chords of one
+    # feed -- are the arcs' own business: their limits are at the junctions already)
+    f0, f1 = tp.feed[j], tp.feed[j + 1]
+    arc &= (f0 < f1 * (1.0 - TOL.rel_equal)) | (f1 < f0 * (1.0 - TOL.rel_equal))
+    return arc & (c0 < c1 * (1.0 - TOL.rel_equal)), arc & (c1 < c0 * (1.0 - TOL.rel_equal))
+
+
+def _arc_ramps(
+    ev: Evaluation,
+    sides: tuple[NDArray, NDArray],
+    speeds: tuple[NDArray, ...],
+    cap: NDArray,
+    a_up: NDArray,
+    a_dn: NDArray,
+    a_blend: NDArray,
+    holds: tuple[NDArray, NDArray, NDArray, NDArray],
+) -> tuple[tuple[NDArray, ...], ArcRamps | None]:
+    """LinuxCNC's blend arcs between blocks of different feeds (a slow plunge into a fast
+    cut, a cut into a slow one). The arc's requested speed is the higher of the two blocks'
+    (blendmath.c ``blendParamKinematics``: v_req = fmax(v_req_prev, v_req_this)), its top
+    speed its own limit (``Evaluation.junction_arc_feed``); so the planner leaves the slow
+    block at its speed u at the arc's tangent point and changes speed along the whole arc
+    at the arc's tangential acceleration a (half the plane's, ``a_blend``), up to the arc's
+    limit -- where the profile's corner speed, shared by both blocks, is the slow one's.
+    Here the slow block's half arc runs from u to v_mid = min(top, sqrt(u^2 + 2 a d_slow))
+    at the corner, the fast block's half from v_mid to v_far = min(top, sqrt(v_mid^2 +
+    2 a d_fast)), at most what the fast block can still brake from (accelerate to) over
+    the rest of its length; the fast block's entry (exit) is v_far, its speeds and time
+    made again, the slow block keeps its speeds. (The time-reversed shape where the slow
+    block comes second.) ``sides``: :func:`_ramped_sides`; both halves of those arcs were
+    held while the speeds were planned. Returns the speeds (v0, peak, v1, time, d_cr) and
+    the holds' speeds (None: no arc changed)."""
+    rising, falling = sides
+    sel = np.flatnonzero(rising | falling)
+    arc_v = ev.junction_arc_feed
+    if sel.size == 0 or arc_v is None:
+        return speeds, None
+    v0, peak, v1, time, d_cr = speeds
+    h_start, h_end, r_start, r_end = holds
+    tp = ev.toolpath
+    s = ev.junction[sel]
+    f = s + 1
+    up = rising[sel]
+    u = v1[s]  # the planned corner speed (the slow block's)
+    top = np.fmin(arc_v[sel], np.maximum(cap[s], cap[f]))
+    a = np.minimum(a_blend[s], a_blend[f])
+    run_s, run_f = r_end[s] * h_end[s], r_start[f] * h_start[f]
+    slow_run, fast_run = np.where(up, run_s, run_f), np.where(up, run_f, run_s)
+    mid = np.fmin(top, np.sqrt(u * u + 2.0 * a * slow_run))
+    far = np.fmin(top, np.sqrt(mid * mid + 2.0 * a * fast_run))
+    fast = np.where(up, f, s)
+    inner = np.maximum(tp.length[fast] - h_start[fast] - h_end[fast], 0.0)
+    other = np.where(up, v1[fast], v0[fast])  # the fast block's planned speed at its far end
+    a_far = np.where(up, a_dn[fast], a_up[fast])
+    far = np.fmin(far, np.sqrt(other * other + 2.0 * a_far * inner))
+    mid = np.fmin(mid, far)
+    ok = (far > u * (1.0 + TOL.rel_equal)) & (u > 0)
+    if not ok.any():
+        return speeds, None
+    s, f, up, mid, far, a = s[ok], f[ok], up[ok], mid[ok], far[ok], a[ok]
+    v0, v1 = v0.copy(), v1.copy()
+    ramps = ArcRamps(v0.copy(), v1.copy(), np.ones(tp.n), np.ones(tp.n))
+    ramps.end[s], ramps.a_end[s] = mid, a
+    ramps.start[f], ramps.a_start[f] = mid, a
+    v1[s[~up]] = far[~up]  # the fast block's body ends (starts) at the arc's far speed
+    v0[f[up]] = far[up]
+    k = np.unique(np.concatenate([s, f]))
+    t_hold = np.where(
+        h_start[k] > 0,
+        ramped_hold_time(r_start[k] * h_start[k], ramps.start[k], v0[k], ramps.a_start[k]),
+        0.0,
+    ) + np.where(
+        h_end[k] > 0,
+        ramped_hold_time(r_end[k] * h_end[k], v1[k], ramps.end[k], ramps.a_end[k]),
+        0.0,
+    )
+    peak, d_cr, time = peak.copy(), d_cr.copy(), time.copy()
+    between = tp.length[k] - h_start[k] - h_end[k]
+    peak[k], d_cr[k], time[k] = _piece(v0[k], v1[k], cap[k], a_up[k], a_dn[k], between, t_hold)
+    return (v0, peak, v1, time, d_cr), ramps
 
 
 def _piecewise_ramp(q, u, pieces) -> tuple[NDArray, NDArray]:
@@ -1961,15 +2192,30 @@ def build_profile(
         np.minimum(b, lazy, out=b)
         del lazy
     caps = _window_caps(b, length, acc, jerk, lookahead)  # the same in every round
+    jerk_limited = bool(np.isfinite(jerk).any())
+    # LinuxCNC's blend arcs between blocks of different feeds (_arc_ramps; trapezoidal
+    # ramps only: the S-curve ramps keep the holds flat)
+    sides = None
+    if along_blends > 0.0 and m.corner_blending == "linuxcnc" and not jerk_limited:
+        sides = _ramped_sides(ev, cap)
+        if sides is not None and not (sides[0].any() or sides[1].any()):
+            sides = None
     free_arcs: _FreeArcs | None = None
     if along_blends > 0.0 or ev.blend_rest is not None:
         h_start, h_end, r_end, free_arcs = _blend_holds(
-            ev, cap, caps, acc, a_blend if along_blends > 0.0 else None, h_start, h_end, r_end
+            ev,
+            cap,
+            caps,
+            acc,
+            a_blend if along_blends > 0.0 else None,
+            h_start,
+            h_end,
+            r_end,
+            None if sides is None else sides[0] | sides[1],
         )
-    if along_blends > 0.0:
+    if along_blends > 0.0 and sides is None:
         del a_blend  # (used by the holds only)
     holds = _Holds(length, h_start, h_end, r_start, r_end)
-    jerk_limited = bool(np.isfinite(jerk).any())
     if jerk_limited:
         free_arcs = None  # (the S-curve ramps keep the shortened holds)
     # The rounds change the accelerations only (see _Rounds); the last one (the rounds' end,
@@ -2015,6 +2261,12 @@ def build_profile(
             holds = _Holds(length, h_start, h_end, r_start, r_end)
             speeds = _moves(v, cap, a_up, a_dn, holds)
         del v
+    arc_ramps = None
+    if sides is not None:
+        speeds, arc_ramps = _arc_ramps(
+            ev, sides, speeds, cap, a_up, a_dn, a_blend, (h_start, h_end, r_start, r_end)
+        )
+        del a_blend
     # The holds' times are in the speeds now: the lengths between them go before the ramps
     # are made, and the cruise lengths once the ramps' marks have them.
     del holds
@@ -2047,4 +2299,5 @@ def build_profile(
         ramps=ramps,
         pause=pause,
         lead=lead,
+        arc_ramps=arc_ramps,
     )
