@@ -259,13 +259,11 @@ def _move_values(pred: Prediction) -> NDArray[np.int64] | None:
         prof.a_down,
         prof.hold_start,
         prof.hold_end,
-        prof.hold_start_ratio,
-        prof.hold_end_ratio,
         *(prof.ramps or ()),
     ]
-    if prof.arc_ramps is not None:  # holds whose speed changes along them
+    if prof.arc_ramps is not None:  # holds whose speed changes along them (and their ratios)
         ar = prof.arc_ramps
-        cols += [ar.start, ar.end, ar.a_start, ar.a_end]
+        cols += [prof.hold_start_ratio, prof.hold_end_ratio, ar.start, ar.end, ar.a_start, ar.a_end]
     return np.stack([np.asarray(c, dtype=np.float64).view(np.int64) for c in cols])
 
 

@@ -542,12 +542,14 @@ class Profile:
     def hold_times_of(self, k: NDArray[np.int64] | slice) -> tuple[NDArray, NDArray]:
         """:attr:`hold_times` of the moves ``k`` only."""
         hs, he = self.hold_start[k], self.hold_end[k]
-        ar = self.arc_ramps
-        if ar is not None:
-            run0, run1 = self.hold_start_ratio[k] * hs, self.hold_end_ratio[k] * he
-            t0 = ramped_hold_time(run0, ar.start[k], self.v_entry[k], ar.a_start[k])
-            t1 = ramped_hold_time(run1, self.v_exit[k], ar.end[k], ar.a_end[k])
-            return np.where(hs > 0, t0, 0.0), np.where(he > 0, t1, 0.0)
+        if self.arc_ramps is not None:
+            return _ramped_hold_times(
+                self.arc_ramps,
+                k,
+                (hs, he, self.hold_start_ratio[k], self.hold_end_ratio[k]),
+                self.v_entry[k],
+                self.v_exit[k],
+            )
         with np.errstate(divide="ignore", invalid="ignore"):
             h0 = np.where(hs > 0, self.hold_start_ratio[k] * hs / self.v_entry[k], 0.0)
             h1 = np.where(he > 0, self.hold_end_ratio[k] * he / self.v_exit[k], 0.0)
@@ -1833,12 +1835,10 @@ def _blend_holds(
     hs, he, _ = holds(~binds)
     v = _passes(caps, np.maximum(tp.length - hs - he, 0.0), acc, acc)
     below = v[j + 1] < ev.junction_feed * (1.0 - TOL.rel_equal)
+    if held is not None:
+        below &= ~held  # (held arcs are in binds: neither free nor freed)
     free = ~binds | below
-    if held is not None:
-        free &= ~held
     freed = binds & below
-    if held is not None:
-        freed &= ~held
     if not freed.any():
         return (*holds(free), free_arcs(free))
     # An arc freed so may still reach its limit once its neighbours' arcs are free too: then
@@ -1887,7 +1887,7 @@ def _ramp_shape(run, va, vb, a):
     reaches (the high one, but for rounding)."""
     lo, hi = np.minimum(va, vb), np.maximum(va, vb)
     with np.errstate(divide="ignore", invalid="ignore"):
-        d_r = np.minimum(np.nan_to_num((hi * hi - lo * lo) / (2.0 * a), nan=0.0), run)
+        d_r = np.minimum(nan_to_num((hi * hi - lo * lo) / (2.0 * a), nan=0.0), run)
     top = np.minimum(np.sqrt(lo * lo + 2.0 * a * d_r), hi)
     return lo, hi, d_r, top
 
@@ -1900,6 +1900,18 @@ def ramped_hold_time(run, va, vb, a) -> NDArray[np.float64]:
     with np.errstate(divide="ignore", invalid="ignore"):
         t = (top - lo) / a + (run - d_r) / hi
     return nan_to_num(t, nan=0.0, posinf=0.0)
+
+
+def _ramped_hold_times(
+    ar: ArcRamps, k: NDArray | slice, holds: tuple[NDArray, ...], v0: NDArray, v1: NDArray
+) -> tuple[NDArray, NDArray]:
+    """Time (s) in the start and end hold of the moves ``k`` (0 where a move has none):
+    ``holds`` their (h_start, h_end, r_start, r_end), ``v0`` and ``v1`` their entry and exit
+    speeds, ``ar`` the profile's :class:`ArcRamps`."""
+    hs, he, rs, re = holds
+    t0 = ramped_hold_time(rs * hs, ar.start[k], v0, ar.a_start[k])
+    t1 = ramped_hold_time(re * he, v1, ar.end[k], ar.a_end[k])
+    return np.where(hs > 0, t0, 0.0), np.where(he > 0, t1, 0.0)
 
 
 def ramped_hold_speed(x, run, va, vb, a) -> NDArray[np.float64]:
@@ -2009,15 +2021,10 @@ def _arc_ramps(
     v1[s[~up]] = far[~up]  # the fast block's body ends (starts) at the arc's far speed
     v0[f[up]] = far[up]
     k = np.unique(np.concatenate([s, f]))
-    t_hold = np.where(
-        h_start[k] > 0,
-        ramped_hold_time(r_start[k] * h_start[k], ramps.start[k], v0[k], ramps.a_start[k]),
-        0.0,
-    ) + np.where(
-        h_end[k] > 0,
-        ramped_hold_time(r_end[k] * h_end[k], v1[k], ramps.end[k], ramps.a_end[k]),
-        0.0,
+    t0, t1 = _ramped_hold_times(
+        ramps, k, (h_start[k], h_end[k], r_start[k], r_end[k]), v0[k], v1[k]
     )
+    t_hold = t0 + t1
     peak, d_cr, time = peak.copy(), d_cr.copy(), time.copy()
     between = tp.length[k] - h_start[k] - h_end[k]
     peak[k], d_cr[k], time[k] = _piece(v0[k], v1[k], cap[k], a_up[k], a_dn[k], between, t_hold)
