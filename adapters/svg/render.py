@@ -1454,9 +1454,12 @@ def render_diagnosis(
         for dd in d.data:
             sel = (dd.s >= z.s_start - pad) & (dd.s <= z.s_end + pad)
             if sel.sum() >= 2:
-                series.append((dd.s[sel], d.before.speed_at(dd.s[sel]) * 60, "#888888", "5 3"))
+                # (read as the trace's feed is: its commanded column or its positions' speed)
+                before = d.before.speed_at(dd.s[sel], commanded=dd.commanded)
+                series.append((dd.s[sel], before * 60, "#888888", "5 3"))
                 if d.chosen:
-                    series.append((dd.s[sel], d.after.speed_at(dd.s[sel]) * 60, "#2166ac", ""))
+                    after = d.after.speed_at(dd.s[sel], commanded=dd.commanded)
+                    series.append((dd.s[sel], after * 60, "#2166ac", ""))
                 series.append((dd.s[sel], dd.v[sel] * 60, "#000000", ""))  # on top
                 break
         if not series:

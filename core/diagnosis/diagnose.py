@@ -201,7 +201,7 @@ class Diagnosis:
         for d in self.data:
             if d.case != case:
                 continue
-            r = (d.v - self.befores[case].speed_at(d.s)) / d.feed
+            r = (d.v - self.befores[case].speed_at(d.s, commanded=d.commanded)) / d.feed
             np.add.at(num, d.move, r)
             np.add.at(cnt, d.move, 1.0)
         with np.errstate(invalid="ignore", divide="ignore"):

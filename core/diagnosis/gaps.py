@@ -58,7 +58,7 @@ def gap_zones(
     for d in data:
         pred = preds[d.case]
         tp = pred.toolpath
-        vp = pred.speed_at(d.s)
+        vp = pred.speed_at(d.s, commanded=d.commanded)
         r = d.v - vp
         big = np.abs(r) > GAP_SHARE * d.feed
         if not big.any():

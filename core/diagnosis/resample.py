@@ -68,6 +68,9 @@ class Data:
     rapid_move: NDArray[np.int64] = field(
         default_factory=lambda: np.zeros(0, dtype=np.int64), repr=False
     )
+    #: the measured feed is the trace's commanded-feed column (``Alignment.commanded``):
+    #: predictions are read as it is (``Prediction.speed_at(..., commanded=True)``)
+    commanded: bool = False
 
 
 def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: int = 0) -> Data:
@@ -131,6 +134,7 @@ def resample(tp: ToolPath, al: Alignment, label: str, step: float = STEP, case: 
         rapid_v=rapid_v,
         rapid_weight=rapid_weight,
         rapid_move=rapid_move,
+        commanded=al.commanded,
     )
 
 
@@ -210,7 +214,7 @@ def held_out_speeds(preds: Sequence[Prediction], data: Sequence[Data]) -> list[N
     """Each run's predicted speed at its held-out grid points: for :func:`held_out_chunks`
     and :func:`gap` of the same predictions (the evidence of an effect needs both), made
     once."""
-    return [preds[d.case].speed_at(d.s[~d.calibration]) for d in data]
+    return [preds[d.case].speed_at(d.s[~d.calibration], commanded=d.commanded) for d in data]
 
 
 def held_out_chunks(
@@ -226,7 +230,7 @@ def held_out_chunks(
         if not sel.any():
             continue
         chunk = d.chunk if d.chunk is not None else np.zeros(d.s.size, dtype=np.int64)
-        v = preds[d.case].speed_at(d.s[sel]) if speeds is None else speeds[i]
+        v = preds[d.case].speed_at(d.s[sel], commanded=d.commanded) if speeds is None else speeds[i]
         r = (d.v[sel] - v) * PER_MIN
         w = d.weight[sel]
         c = chunk[sel]
@@ -276,7 +280,7 @@ def _speeds(pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_]) -> ND
     s = d.s[sel]
     bits = _move_values(pred) if which == "calibration" else None
     if bits is None:
-        return pred.speed_at(s)
+        return pred.speed_at(s, commanded=d.commanded)
     entry = d.memo.get(which)
     # (copies of a Data share its memo: kept for this grid and selection only)
     if entry is None or entry[0] is not sel or entry[1] is not d.s:
@@ -341,7 +345,7 @@ def rapid_gap(preds: Sequence[Prediction], data: Sequence[Data]) -> float:
     for d in data:
         if d.rapid_s.size == 0:
             continue
-        r = d.rapid_v - preds[d.case].speed_at(d.rapid_s)
+        r = d.rapid_v - preds[d.case].speed_at(d.rapid_s, commanded=d.commanded)
         sq += float(np.sum(d.rapid_weight * r * r))
         n += float(d.rapid_weight.sum())
     return math.sqrt(sq / n) * PER_MIN if n > 0 else math.nan

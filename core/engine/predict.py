@@ -76,16 +76,21 @@ class Prediction:
         return self.block_speed[k]
 
     @cached_property
-    def _filtered(self) -> tuple[NDArray, NDArray, NDArray] | None:
-        """(t, s, v) of the motion as a trace of the filtered positions shows it, or None
-        without time-domain effects.
+    def _filtered(self) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
+        """(t, s, v, v_commanded) of the motion as a trace of the filtered positions shows
+        it, or None without time-domain effects.
 
         The filters act on the positions, axis by axis, as a controller's setpoint filter
         and a position loop do: a centred moving average over ``filter_window``, then a
         first-order lag ``servo_tau``. The result is then read as a measured trace is
-        (:mod:`core.diagnosis.align`): its speed is that of the filtered positions, its place on the
-        path their projection. At a corner or on an arc the filtered positions cut inside
-        the path, and their speed dips more than the filtered path speed would.
+        (:mod:`core.diagnosis.align`): its place on the path is the projection of the
+        filtered positions; its speed ``v`` is theirs -- at a corner or on an arc they cut
+        inside the path, and their speed dips more than the filtered path speed would --
+        and ``v_commanded`` is the speed a trace's commanded-feed column shows (read where
+        the alignment took a trace's column as the commanded feed): the planner's path
+        speed through the setpoint filter alone, in time (on a circle it stays the
+        programmed feed while the filtered positions run a smaller circle more slowly; the
+        position loop's lag is behind the command and does not reach it).
         """
         su = self.setup
         if su.servo_tau <= 0 and su.filter_window <= 0:
@@ -93,9 +98,9 @@ class Prediction:
         tp = self.path if self.path is not None else self.toolpath
         raw = self.shared.get("raw")
         if raw is None:
-            t, s, _ = self.signal(raw=True)
-            raw = self.shared["raw"] = (t, s, tp.point_at(s))
-        t, s, pos = raw
+            t, s, v_raw = self.signal(raw=True)
+            raw = self.shared["raw"] = (t, s, tp.point_at(s), v_raw)
+        t, s, pos, v_raw = raw
         dt = t[1] - t[0] if t.size > 1 else SIGNAL_DT
         # Rest before and after, long enough for the filters' tails to carry the distance.
         head = int(np.ceil(0.5 * su.filter_window / dt)) + 1
@@ -111,12 +116,16 @@ class Prediction:
         t = (np.arange(s.size) - head) * dt + t[0]
         # (the points of the padded arc lengths: those of the ends repeated)
         pos = np.concatenate([np.repeat(pos[:1], head, 0), pos, np.repeat(pos[-1:], tail, 0)])
+        # the planner's speed over the same times: at rest before and after
+        v_cmd = np.concatenate([np.zeros(head), v_raw, np.zeros(tail)])
         if k > 1:
             kernel = np.ones(k) / k
             pad = np.concatenate([np.repeat(pos[:1], k, 0), pos, np.repeat(pos[-1:], k, 0)])
             pos = np.column_stack(
                 [np.convolve(pad[:, j], kernel, mode="same")[k:-k] for j in range(3)]
             )
+            pad_v = np.concatenate([np.zeros(k), v_cmd, np.zeros(k)])
+            v_cmd = np.convolve(pad_v, kernel, mode="same")[k:-k]
         if su.servo_tau > 0:
             a = np.exp(-dt / su.servo_tau)
             pos = _first_order(pos, a)
@@ -125,7 +134,7 @@ class Prediction:
         # (within a millimetre of it).
         guess = np.interp(t - su.servo_tau, t, s)
         s_obs, _ = tp.sample(PROJECTION_STEP).project_near(pos, guess, half_width=1.0)
-        out = t, isotonic(s_obs), v
+        out = t, isotonic(s_obs), v, v_cmd
         kept[key] = out
         while len(kept) > FILTERED_KEPT:
             del kept[next(iter(kept))]  # the oldest
@@ -134,7 +143,7 @@ class Prediction:
     def signal(self, *, raw: bool = False) -> tuple[NDArray, NDArray, NDArray]:
         """(t, s, v) of the predicted motion sampled in time (s, mm, mm/s)."""
         if not raw and self._filtered is not None:
-            return self._filtered
+            return self._filtered[:3]
         tp = self.toolpath
         if self.profile is not None:
             dt = max(SIGNAL_DT, self.profile.cycle_time / MAX_SAMPLES)
@@ -150,13 +159,16 @@ class Prediction:
         s = tp.start_s[k] + (t - t_edges[k]) * v[k]
         return t, s, v[k]
 
-    def speed_at(self, s: ArrayLike) -> NDArray[np.float64]:
-        """Predicted speed (mm/s) at arc lengths ``s`` (mm)."""
+    def speed_at(self, s: ArrayLike, *, commanded: bool = False) -> NDArray[np.float64]:
+        """Predicted speed (mm/s) at arc lengths ``s`` (mm): that of the filtered positions,
+        or with ``commanded`` what a trace's commanded-feed column shows (see
+        :attr:`_filtered`; the two differ only with time-domain effects)."""
         s = np.asarray(s, dtype=np.float64)
         f = self._filtered
         if f is None:
             return self._raw_speed_at(s)
-        _, ss, vv = f
+        _, ss, v_pos, v_cmd = f
+        vv = v_cmd if commanded else v_pos
         keep = np.concatenate([[True], np.diff(ss) > TOL.same_s])
         return np.interp(s, ss[keep], vv[keep])
 
