@@ -1072,3 +1072,27 @@ def test_most_of_the_gap_on_every_one_of_too_few_pieces_is_named_with_half_the_f
     assert decide([fil(3.4, 1 / 16)], floor=9.8)[1] is None
     assert decide([fil(9.35, 1 / 64)], floor=9.8)[1] is None
     assert decide([fil(2.5, 1 / 64, before=7.0)], floor=9.8)[1] is None
+
+
+def test_nearly_all_of_the_gap_where_it_lies_is_named_however_few_the_pieces():
+    """Drawn42's trochoid_420713 (a 23 ms setpoint filter): the filter shows at the two
+    corners before the circles, in one held-out piece, so the sign-flip test gives p = 1/2;
+    jerk_filter, fitted at 23.1 ms on the calibration stretches, takes the held-out gap from
+    13.4 to 0.2 mm/min (98.5 %, 13.2 mm/min: 0.66 of the floor of 20). Under twice the floor
+    and never significant, it passed no clause before; nearly all of the gap (>= 90 %) and
+    at least 0.15 of the floor (3.0 mm/min) is named, and the reason says why. Not named:
+    80 % of it (13.4 -> 2.7: under 90 %, p = 1/2), or 98.5 % of a 2.0 mm/min gap (1.97 mm/min,
+    0.098 of the floor)."""
+    from core.diagnosis.diagnose import EffectResult, decide
+
+    def fil(before, after, p=0.5):
+        return EffectResult("jerk_filter", {"window": 0.0231}, before, after, after, 1, p)
+
+    _, best, reason = decide([fil(13.4, 0.2)], floor=20.0)
+    assert best == "jerk_filter"
+    assert "nearly all of the held-out gap (>= 90%)" in reason
+    assert decide([fil(13.4, 2.7)], floor=20.0)[1] is None
+    assert decide([fil(2.0, 0.03)], floor=20.0)[1] is None
+    # one that passes the test anyway says nothing of the kind
+    _, best, reason = decide([fil(60.0, 1.0, p=0.0)], floor=20.0)
+    assert best == "jerk_filter" and "nearly all" not in reason

@@ -97,6 +97,19 @@ MOST_FLOOR = 0.25
 #: named effect changed. Held out, drawn25-drawn27: it named nothing.
 FEW_P = 1.0 / 32.0
 FEW_FLOOR = 0.5
+#: ... or (7) it removes nearly all of the gap -- at least NEAR_ALL_SHARE -- and at least
+#: NEAR_ALL_FLOOR of the floor, whatever the test says: fitted on the calibration stretches,
+#: it predicts the held-out gap where it lies, however few pieces that is (a setpoint
+#: filter on a trochoid shows at the two corners before the circles: one held-out piece,
+#: p = 1/2; drawn42's 23 ms filter fitted at 23.1 ms, 13.4 -> 0.2 mm/min under a floor of
+#: 20). No patch for what the model leaves out does that: on the 544 unchanged runs of the
+#: blind benchmark's sets drawn28-drawn43 (controls and twins, all development data) no
+#: effect removed more than 65 % of the held-out gap, at any p. Re-deciding the stored
+#: evidence of those sets (1472 changed settings): 9 more named rightly (filters of 12-37 ms
+#: on eight trochoids, a 0.036 mm tolerance on a 2.5D part), none wrongly, nothing on the
+#: unchanged runs; a share of 0.7 names 16 rightly and one 3 ms lag a filter.
+NEAR_ALL_SHARE = 0.90
+NEAR_ALL_FLOOR = 0.15
 #: Effects not worse than the best by more than the floor nor significantly (the same test
 #: gives p > TIE_P), or leaving a gap within TIE_SHARE of the best's, explain the data equally
 #: well: the rapids (only the effects that act on them are fitted on them) drop those that
