@@ -119,13 +119,15 @@ class Prediction:
         # the planner's speed over the same times: at rest before and after
         v_cmd = np.concatenate([np.zeros(head), v_raw, np.zeros(tail)])
         if k > 1:
+            # the positions and that speed, column by column, each end repeated (the speed's
+            # ends are rest: it is padded with rest)
             kernel = np.ones(k) / k
-            pad = np.concatenate([np.repeat(pos[:1], k, 0), pos, np.repeat(pos[-1:], k, 0)])
-            pos = np.column_stack(
-                [np.convolve(pad[:, j], kernel, mode="same")[k:-k] for j in range(3)]
+            cols = np.column_stack([pos, v_cmd])
+            pad = np.concatenate([np.repeat(cols[:1], k, 0), cols, np.repeat(cols[-1:], k, 0)])
+            cols = np.column_stack(
+                [np.convolve(pad[:, j], kernel, mode="same")[k:-k] for j in range(4)]
             )
-            pad_v = np.concatenate([np.zeros(k), v_cmd, np.zeros(k)])
-            v_cmd = np.convolve(pad_v, kernel, mode="same")[k:-k]
+            pos, v_cmd = cols[:, :3], cols[:, 3]
         if su.servo_tau > 0:
             a = np.exp(-dt / su.servo_tau)
             pos = _first_order(pos, a)
