@@ -19,8 +19,8 @@ changes from day to day):
 
 Every ncperf run is a fresh ``python -m core`` process: wall time around it, peak memory the
 child's maximum resident set size (os.wait4). ncperf's bytecode is written first (as ``pip
-install .`` does), so no run pays for compiling its modules. A last table splits one in-process run of the
-1M raster into its stages.
+install .`` does), so no run pays for compiling its modules. A last table splits one
+in-process run of the 1M raster into its stages.
 
 Bars (issue 13, on this machine, as ratios in one run): stellabee1 at most 0.8 x rs274;
 1M moves with --svg under 2.5 s and 500 MB; 5M under 2 GB, time linear; --help and
@@ -93,7 +93,9 @@ def stages(program: Path, svg: Path) -> dict[str, float]:
     """Seconds per stage of one in-process run."""
     from core import FileTarget, Ncperf, build_annotations, load_preset
     from core.engine.profile import build_profile
+    from core.model.heap import keep_freed_memory
 
+    keep_freed_memory()  # as the command line does
     t = {}
     t0 = time.perf_counter()
     nc = Ncperf()

@@ -1,37 +1,121 @@
-"""Give the C allocator's free heap pages back to the system between the analysis's stages.
+"""The C allocator's memory between the analysis's stages: kept for reuse, or given back.
 
-numpy's large arrays are mapped and unmapped whole, but glibc's malloc serves arrays under
-its (self-adjusting, up to 32 MB) mapping threshold, and the pieces of piecewise work, from
-its heap: a stage that ends leaves holes there that the next stage's large arrays, mapped
-on their own, never reuse, and that stay in the resident set (5M moves: about 300 MB after
-the reader). ``malloc_trim`` hands those pages back; elsewhere this does nothing.
+numpy's arrays come from glibc's malloc: from its heap under its mapping threshold
+(self-adjusting, up to 32 MB), mapped and unmapped whole above it. Two costs pull apart:
+
+* **Page faults.** Memory the process gets from the system is faulted in page by page on
+  first touch, and on a virtual machine a fault costs several microseconds (this project's
+  VM: 3-4.5 us a 4 kB page when idle, where filling the page takes 0.25 us). glibc's
+  defaults hand freed memory back quickly -- arrays above the threshold are unmapped when
+  freed, and the heap's top is trimmed once two thresholds are free -- so each stage's
+  arrays fault their pages in again. :func:`keep_freed_memory` (the command line sets it)
+  serves every array up to 32 MB from the heap and trims the heap only when asked.
+* **The resident set.** A stage that ends leaves holes in the heap that the next stage's
+  arrays do not always fit, and that stay resident (5M moves: 336 MB after the reader).
+  :func:`release_free_heap` (``malloc_trim``) hands them back between stages -- where there
+  is enough of them to matter (:data:`WORTH_TRIMMING`): below that, the next stage reuses
+  the pages instead of faulting them in again.
+
+``ncperf analyze`` on this project's VM, 2026-11-28 (12:19-12:22 UTC, idle; three runs in
+turns, the 5M raster one; faults as counted by the kernel, time wall): stellabee1 60,300 ->
+25,800 faults, 0.18-0.21 -> 0.06-0.09 s in the kernel, 1.03 -> 0.79 s (medians of 3 and of
+9: it trims at no threshold tried), peak 115 -> 118 MB; the 1M raster with ``--svg``
+67,000 -> 33,000 faults, 2.50 -> 2.29 s, 388 -> 403 MB; 5M 272,000 -> 242,000 faults, 12.7
+-> 12.0 s, 1614 -> 1630 MB (the VM's cost per fault varies several-fold from run to run:
+the faults are the steady figure).
+
+Values are untouched either way: only where free memory lives changes. Elsewhere than glibc
+(2.33+, for ``mallinfo2``) both do nothing.
 """
 
 from __future__ import annotations
 
+import ctypes
 import sys
-from collections.abc import Callable
 from functools import cache
+
+#: glibc's mallopt parameters (malloc.h).
+M_TRIM_THRESHOLD = -1
+M_TOP_PAD = -2
+M_MMAP_THRESHOLD = -3
+#: Arrays up to this size come from the heap (glibc's largest mapping threshold; 4M moves'
+#: columns of doubles). Larger ones are mapped, and unmapped when freed, as before.
+HEAP_ARRAYS = 32 << 20
+#: The heap's top is never trimmed on its own (only by :func:`release_free_heap`): the
+#: largest value mallopt takes.
+NEVER_TRIM = 2**31 - 1
+#: What the heap grows by beyond a request, so that growing stages ask the system less often.
+TOP_PAD = 16 << 20
+#: :func:`release_free_heap` gives the free heap back from this size on. Below it the next
+#: stage's arrays reuse the pages without faulting them in again (a 1M-move raster's stages
+#: leave 65-192 MB, and trimming them left its peak as it was); above it (5M moves: 336 MB
+#: after the reader) the resident set is what counts.
+WORTH_TRIMMING = 256 << 20
+
+
+class _Mallinfo2(ctypes.Structure):
+    _fields_ = [
+        (name, ctypes.c_size_t)
+        for name in (
+            "arena",
+            "ordblks",
+            "smblks",
+            "hblks",
+            "hblkhd",
+            "usmblks",
+            "fsmblks",
+            "uordblks",
+            "fordblks",
+            "keepcost",
+        )
+    ]
 
 
 @cache
-def _malloc_trim() -> Callable[[int], int] | None:
+def _glibc() -> ctypes.CDLL | None:
+    """The C library when it is glibc with the functions used here (2.33+), else None."""
     if not sys.platform.startswith("linux"):
         return None
-    import ctypes
-
     try:
-        fn = ctypes.CDLL(None).malloc_trim  # glibc; not every C library has it
-    except (OSError, AttributeError):
+        lib = ctypes.CDLL(None)
+        lib.malloc_trim.argtypes = [ctypes.c_size_t]
+        lib.malloc_trim.restype = ctypes.c_int
+        lib.mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
+        lib.mallopt.restype = ctypes.c_int
+        lib.mallinfo2.argtypes = []
+        lib.mallinfo2.restype = _Mallinfo2
+    except (OSError, AttributeError):  # not glibc (musl has no mallinfo2), or an older one
         return None
-    fn.argtypes = [ctypes.c_size_t]
-    fn.restype = ctypes.c_int
-    return fn
+    return lib
+
+
+def keep_freed_memory() -> None:
+    """Let freed memory stay with the process for its next arrays (module docstring): every
+    array up to :data:`HEAP_ARRAYS` from the heap, the heap trimmed only by
+    :func:`release_free_heap`. For a process that runs one analysis (the command line):
+    it changes where memory lives, not what is computed."""
+    lib = _glibc()
+    if lib is None:
+        return
+    lib.mallopt(M_MMAP_THRESHOLD, HEAP_ARRAYS)
+    lib.mallopt(M_TRIM_THRESHOLD, NEVER_TRIM)
+    lib.mallopt(M_TOP_PAD, TOP_PAD)
+
+
+def free_heap() -> int | None:
+    """Bytes free in the allocator's heap (glibc's ``mallinfo2().fordblks``), or None."""
+    lib = _glibc()
+    if lib is None:
+        return None
+    return int(lib.mallinfo2().fordblks)
 
 
 def release_free_heap() -> None:
-    """Return the allocator's free heap memory to the system (glibc's ``malloc_trim``;
-    nothing where it is not available). Values are untouched: only free pages go."""
-    fn = _malloc_trim()
-    if fn is not None:
-        fn(0)
+    """Return the allocator's free heap memory to the system (glibc's ``malloc_trim``)
+    when it is :data:`WORTH_TRIMMING`; nothing where glibc is not there. Values are
+    untouched: only free pages go."""
+    lib = _glibc()
+    if lib is None:
+        return
+    if int(lib.mallinfo2().fordblks) >= WORTH_TRIMMING:
+        lib.malloc_trim(0)
