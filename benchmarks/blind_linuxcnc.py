@@ -1,7 +1,7 @@
 """The blind diagnosis benchmark: programs and settings the diagnosis was not tuned on.
 
 Not a test: ``python benchmarks/blind_linuxcnc.py --seeds SET [--jobs 2] [--only N]`` (SET:
-tune, score, score2-score6, drawn7-drawn45; needs LinuxCNC and ../shared/tools/linuxcnc; the
+tune, score, score2-score7, drawn7-drawn46; needs LinuxCNC and ../shared/tools/linuxcnc; the
 traces are recorded in real time, about 25 min per seed set, and cached).
 
 Programs come from ten families (benchmarks/blind/families.py: random polygons, trochoidal
@@ -9,9 +9,10 @@ slots, gears of chords, free-form chord paths, spiral pockets, a dome raster, en
 thread milling, a 2.5D part, long kinked lines), each drawn from a seed. Seed sets are kept
 apart: ``tune`` (seeds 100-999), used while developing the effects and the decision rule,
 and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999), ``score3`` (30000-30999),
-``score4`` (40000-40999), ``score5`` (50000-50999), ``score6`` (60000-60999) and
+``score4`` (40000-40999), ``score5`` (50000-50999), ``score6`` (60000-60999), ``score7``
+(5000000-5000999) and
 ``drawn7`` (70500-71009; each case's setting drawn from a range instead of the fixed values)
-and ``drawn8`` to ``drawn45`` (80500-, 90500-, ..., 450500-; the same kind),
+and ``drawn8`` to ``drawn46`` (80500-, 90500-, ..., 460500-; the same kind),
 each run for the figures in the README (the README says which were looked at afterwards).
 Every case is one program run through LinuxCNC 2.9's real planner on the harness's default
 mill with ONE setting changed (per-axis acceleration or speed, servo period, the path
@@ -62,6 +63,9 @@ INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
 #: was looked at; diagnosed once, at commit 312e82e (2026-11-26, 19:47-20:14 UTC).
 #: ``score6`` (seeds 60000-60509): recorded on 2026-11-26 (from 21:30 UTC) at commit 56c8cd2,
 #: before the session's diagnosis changes (developed on tune, score2-score5), no trace looked at.
+#: ``score7`` (seeds 5000000-5000509, the fixed settings again): recorded on 2026-11-28 from
+#: 11:49 UTC at commit a24fb61, the first fixed-setting set since score6, before any of its
+#: traces was looked at; diagnosed once.
 SEEDS = {
     "tune": 100,
     "score": 9000,
@@ -109,6 +113,8 @@ SEEDS = {
     "drawn43": 430500,
     "drawn44": 440500,
     "drawn45": 450500,
+    "score7": 5000000,
+    "drawn46": 460500,
 }
 #: Programs per changed setting.
 PER_VARIANT = 4
