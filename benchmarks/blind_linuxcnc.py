@@ -63,9 +63,10 @@ INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
 #: was looked at; diagnosed once, at commit 312e82e (2026-11-26, 19:47-20:14 UTC).
 #: ``score6`` (seeds 60000-60509): recorded on 2026-11-26 (from 21:30 UTC) at commit 56c8cd2,
 #: before the session's diagnosis changes (developed on tune, score2-score5), no trace looked at.
-#: ``score7`` (seeds 5000000-5000509, the fixed settings again): recorded on 2026-11-28 from
-#: 11:49 UTC at commit a24fb61, the first fixed-setting set since score6, before any of its
-#: traces was looked at; diagnosed once.
+#: ``score7`` (seeds 5000000-5000509, the fixed settings again): recorded on 2026-11-28,
+#: 11:49-12:19 UTC (a hung LinuxCNC run killed at 11:57, the recording resumed from the
+#: cache), with a24fb61's harness, the first fixed-setting set since score6, before any of
+#: its traces was looked at; diagnosed once, at 35fa3b9 (12:50-12:57 UTC).
 SEEDS = {
     "tune": 100,
     "score": 9000,
