@@ -660,6 +660,38 @@ def test_the_rapids_decide_between_effects_equal_on_the_feed_moves():
     assert decide(three((30.0, 22.0, 35.0)), floor=15.0)[1] == "feed_override"
 
 
+def test_an_effect_that_wrecks_the_rapids_cannot_lead():
+    """drawn46's freeform_460661 (exact stop, G61.1, on a free-form chord path; development
+    data): a 15.9 mm/s path speed limit removes 3002.9 -> 169.9 mm/min of the held-out gap,
+    exact stop 3002.9 -> 248.0 (78 apart: more than the floor of 30, and significantly, so
+    not equal), but the limit leaves the rapids 8754.8 mm/min off where the model without an
+    effect is 563.2 off (exact stop does not change them): 8754.8 - 563.2 > max(30, 563.2),
+    so the limit cannot lead and exact stop is named; the reason says why. An effect that
+    leaves the rapids at most twice as far off (here 1126.4 - 563.2 = 563.2, not more) is
+    not dropped, nor anything where the model's rapid gap is not known (NaN)."""
+    from core.diagnosis.diagnose import EffectResult, decide
+
+    def two(limit_rapids):
+        limit = EffectResult(
+            "path_feed_limit", {"max_feed": 15.87}, 3002.9, 169.9, 160.0, 1, 0.0,
+            np.full(8, 1.0), limit_rapids,
+        )  # fmt: skip
+        stop = EffectResult(
+            "exact_stop", {}, 3002.9, 248.0, 240.0, 0, 0.0, np.full(8, 4.0), 563.2
+        )  # fmt: skip
+        return [limit, stop]
+
+    _, best, reason = decide(two(8754.8), floor=30.0, rapid_before=563.2)
+    assert best == "exact_stop"
+    assert "path_feed_limit fit the feed moves but leave the rapids 8755 mm/min off" in reason
+    assert "(without an effect: 563)" in reason
+    assert decide(two(1126.4), floor=30.0, rapid_before=563.2)[1] == "path_feed_limit"
+    assert decide(two(8754.8), floor=30.0)[1] == "path_feed_limit"
+    # the only effect that clears wrecks the rapids: none is named
+    _, best, reason = decide(two(8754.8)[:1], floor=30.0, rapid_before=563.2)
+    assert best is None and reason.startswith("none; path_feed_limit fit the feed moves")
+
+
 def test_a_large_share_removed_far_beyond_chance_needs_half_the_floor():
     """The blind benchmark's tune kinked_lines_270 (a 5 ms servo lag put on the trace, F6000,
     floor 30 mm/min = 0.5 % of F): servo_lag fitted at 5.1 ms removes 59.5 -> 33.9 mm/min

@@ -23,7 +23,10 @@ effect explains it, and how far the gap shrinks once that effect is modelled.
    too few pieces for the test, by FEW_FLOOR of the floor; or nearly all of it --
    NEAR_ALL_SHARE -- by NEAR_ALL_FLOOR of the floor, however few the pieces); an effect
    whose fit left every parameter at the machine file's value (a block time of 1.00 ms
-   where the file says 1.02) is not named, whatever it removes. Among
+   where the file says 1.02) is not named, whatever it removes; nor is one whose fit
+   leaves the rapids more than twice as far off as the model without an effect, and the
+   floor more (RAPIDS_CONTRADICT: it explains the feed moves with a machine the rapids show
+   is not there). Among
    the effects that clear it, those not significantly worse than the best, or leaving a gap
    within TIE_SHARE of its gap, are equally good: the rapids (which only the effects that
    act on them are fitted on, on their calibration half) drop those they show wrong (a
@@ -95,6 +98,7 @@ from core.diagnosis.rules import (
     NEAR_ALL_SHARE,
     NOISE_K,
     PER_MIN,
+    RAPIDS_CONTRADICT,
     SIG_P,
     SIGN_FLIPS,
     STOP_SHARE,
@@ -302,7 +306,12 @@ def diagnose_cases(
     # another one patches something else and is not named (it stays in the table, last)
     read = frozenset({"block_cycle_time"}) if clock_agrees(base.machine, cycle) else frozenset()
     ranked, best, reason = decide(
-        [r for r in results if r.name not in read], floor, folded, stretched, idle
+        [r for r in results if r.name not in read],
+        floor,
+        folded,
+        stretched,
+        idle,
+        rapid_before=rapid_gap(before, data),
     )
     results = ranked + [r for r in results if r.name in read]
     clock, clock_preds, clock_why = _on_clock(
@@ -759,6 +768,7 @@ def decide(
     idle: frozenset[str] = frozenset(),
     *,
     near_all: bool = True,
+    rapid_before: float = math.nan,
 ) -> tuple[list[EffectResult], str | None, str]:
     """Rank the effects and name the best one, or none (see the module docstring).
 
@@ -772,9 +782,11 @@ def decide(
     (:func:`clears`) is tried -- on the feed moves, where it was checked on the blind
     benchmark's stored evidence; not on the rapids, whose gaps on an unchanged machine
     include what is not modelled there (LinuxCNC's canned-cycle rapids accelerate at
-    0.9 of the axes' limit) and were not stored to check it on. Returns the effects in
-    rank order (the named or leading one first, then by held-out gap), the named effect
-    and the reason in one sentence."""
+    0.9 of the axes' limit) and were not stored to check it on. ``rapid_before``: the
+    rapids' gap of the model without any effect (NaN: not known); an effect whose fit
+    leaves the rapids more than twice as far off, and the floor more, cannot lead
+    (:data:`RAPIDS_CONTRADICT`). Returns the effects in rank order (the named or leading one
+    first, then by held-out gap), the named effect and the reason in one sentence."""
     ranked = sorted(results, key=lambda r: r.held_out_gap_after)
     if not ranked:
         return ranked, None, "no effects to try"
@@ -787,6 +799,24 @@ def decide(
             r.held_out_gap_before, r.held_out_gap_after, r.p, floor, BEST_SHARE, near_all=near_all
         )
     ]
+    # the rapids contradict an effect whose fit wrecks them: it explains the feed moves with a
+    # machine the rapids show is not there (RAPIDS_CONTRADICT)
+    wrecks = [
+        r
+        for r in ok
+        if math.isfinite(r.rapid_gap)
+        and r.rapid_gap - rapid_before > RAPIDS_CONTRADICT * max(floor, rapid_before)
+    ]
+    ok = [r for r in ok if all(r is not w for w in wrecks)]
+    wrecked = (
+        f"; {', '.join(r.name for r in wrecks)} fit the feed moves but leave the rapids "
+        f"{', '.join(f'{r.rapid_gap:.0f}' for r in wrecks)} mm/min off (without an effect: "
+        f"{rapid_before:.0f}): contradicted by them"
+        if wrecks
+        else ""
+    )
+    if not ok and wrecks:
+        return ranked, None, "none" + wrecked
     if not ok:
         lead = ranked[0]
         if lead.name in idle and clears(
@@ -882,6 +912,7 @@ def decide(
             f"; nearly all of the held-out gap (>= {NEAR_ALL_SHARE:.0%}), predicted where it lies "
             "from the calibration stretches: named whatever the test over so few pieces says"
         )
+    reason += wrecked
     same = [r.name for r in by_rapids if r is not best]
     if slower:
         reason += (
