@@ -1,7 +1,7 @@
 """The blind diagnosis benchmark: programs and settings the diagnosis was not tuned on.
 
 Not a test: ``python benchmarks/blind_linuxcnc.py --seeds SET [--jobs 2] [--only N]`` (SET:
-tune, score, score2-score7, drawn7-drawn46; needs LinuxCNC and ../shared/tools/linuxcnc; the
+tune, score, score2-score7, drawn7-drawn47; needs LinuxCNC and ../shared/tools/linuxcnc; the
 traces are recorded in real time, about 25 min per seed set, and cached).
 
 Programs come from ten families (benchmarks/blind/families.py: random polygons, trochoidal
@@ -12,7 +12,7 @@ and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999), ``score3`` (300
 ``score4`` (40000-40999), ``score5`` (50000-50999), ``score6`` (60000-60999), ``score7``
 (5000000-5000999) and
 ``drawn7`` (70500-71009; each case's setting drawn from a range instead of the fixed values)
-and ``drawn8`` to ``drawn46`` (80500-, 90500-, ..., 460500-; the same kind),
+and ``drawn8`` to ``drawn47`` (80500-, 90500-, ..., 470500-; the same kind),
 each run for the figures in the README (the README says which were looked at afterwards).
 Every case is one program run through LinuxCNC 2.9's real planner on the harness's default
 mill with ONE setting changed (per-axis acceleration or speed, servo period, the path
@@ -116,6 +116,7 @@ SEEDS = {
     "drawn45": 450500,
     "score7": 5000000,
     "drawn46": 460500,
+    "drawn47": 470500,
 }
 #: Programs per changed setting.
 PER_VARIANT = 4
