@@ -25,13 +25,15 @@ turns, the 5M raster one; faults as counted by the kernel, time wall): stellabee
 the faults are the steady figure).
 
 Values are untouched either way: only where free memory lives changes. Elsewhere than glibc
-(2.33+, for ``mallinfo2``) both do nothing.
+both do nothing; a glibc before 2.33 (no ``mallinfo2`` to measure the free heap with) trims
+at every :func:`release_free_heap`, as before.
 """
 
 from __future__ import annotations
 
 import ctypes
 import sys
+from collections.abc import Callable
 from functools import cache
 
 #: glibc's mallopt parameters (malloc.h).
@@ -73,7 +75,7 @@ class _Mallinfo2(ctypes.Structure):
 
 @cache
 def _glibc() -> ctypes.CDLL | None:
-    """The C library when it is glibc with the functions used here (2.33+), else None."""
+    """The C library when it is glibc (``malloc_trim`` and ``mallopt``), else None."""
     if not sys.platform.startswith("linux"):
         return None
     try:
@@ -82,9 +84,7 @@ def _glibc() -> ctypes.CDLL | None:
         lib.malloc_trim.restype = ctypes.c_int
         lib.mallopt.argtypes = [ctypes.c_int, ctypes.c_int]
         lib.mallopt.restype = ctypes.c_int
-        lib.mallinfo2.argtypes = []
-        lib.mallinfo2.restype = _Mallinfo2
-    except (OSError, AttributeError):  # not glibc (musl has no mallinfo2), or an older one
+    except (OSError, AttributeError):  # not glibc (musl has neither)
         return None
     return lib
 
@@ -102,20 +102,31 @@ def keep_freed_memory() -> None:
     lib.mallopt(M_TOP_PAD, TOP_PAD)
 
 
-def free_heap() -> int | None:
-    """Bytes free in the allocator's heap (glibc's ``mallinfo2().fordblks``), or None."""
+@cache
+def _mallinfo2() -> Callable[[], _Mallinfo2] | None:
+    """glibc's ``mallinfo2`` (2.33+), or None."""
     lib = _glibc()
-    if lib is None:
-        return None
-    return int(lib.mallinfo2().fordblks)
+    info = None if lib is None else getattr(lib, "mallinfo2", None)
+    if info is not None:
+        info.argtypes = []
+        info.restype = _Mallinfo2
+    return info
+
+
+def free_heap() -> int | None:
+    """Bytes free in the allocator's heap (glibc's ``mallinfo2().fordblks``), or None (not
+    glibc, or one before 2.33)."""
+    info = _mallinfo2()
+    return None if info is None else int(info().fordblks)
 
 
 def release_free_heap() -> None:
     """Return the allocator's free heap memory to the system (glibc's ``malloc_trim``)
-    when it is :data:`WORTH_TRIMMING`; nothing where glibc is not there. Values are
-    untouched: only free pages go."""
+    when it is :data:`WORTH_TRIMMING` (always where :func:`free_heap` cannot tell); nothing
+    where glibc is not there. Values are untouched: only free pages go."""
     lib = _glibc()
     if lib is None:
         return
-    if int(lib.mallinfo2().fordblks) >= WORTH_TRIMMING:
+    free = free_heap()
+    if free is None or free >= WORTH_TRIMMING:
         lib.malloc_trim(0)
