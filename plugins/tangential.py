@@ -89,6 +89,7 @@ from numpy.typing import NDArray
 
 from core import TOL, Indicator, Machine, ToolPath, hookimpl
 from core.engine.indicators import (
+    BLEND_SPEED,
     LCNC_KINK_RATIO,
     LCNC_MIN_SEGMENT_CYCLES,
     LCNC_TANGENTIAL_RATIO,
@@ -362,7 +363,7 @@ def linuxcnc_choice(
     machine: Machine,
     phi: NDArray,
     refused: NDArray,
-) -> tuple[NDArray, NDArray, NDArray]:
+) -> tuple[NDArray, NDArray, NDArray, NDArray]:
     """LinuxCNC 2.9's choice at the junctions that are not tangent kinks (``tpHandleBlendArc``,
     ``tpChooseBestBlend``): the blend arc, a parabolic blend or a tangent kink, whichever
     promises the highest speed -- the arc's top speed (over its length in one block time too);
@@ -375,7 +376,9 @@ def linuxcnc_choice(
     crosses the junction at (a parabolic blend: the speed that costs the time of the
     segments' overlap, :func:`parabolic_time_speed`, from the blend speed the planner
     computes while running with the segments' halved accelerations), and the share of the
-    tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio). ``caps``: the two
+    tangential acceleration both segments keep (1, 1/2, 1 - kink_ratio), and at a parabolic
+    blend the speed the segment before starts it at (its blend speed, NaN elsewhere: the
+    overlap a trace's feed column shows, :data:`BLEND_SPEED`). ``caps``: the two
     segments' top speeds (:func:`segment_caps`); ``phi``: the direction change the blend
     arc is laid for; ``refused``: junctions whose arc LinuxCNC refuses
     (:func:`arc_blend_geometry`).
@@ -422,7 +425,7 @@ def linuxcnc_choice(
         u, _ = parabolic_time_speed(run[0], a0 * 0.5, a1 * 0.5, f1, servo_period(machine))
     speed = np.where(mode == 0, arc_feed, np.where(mode == 1, u, perf_tangent))
     share = np.where(mode == 1, 0.5, np.where(mode == 2, 1.0 - LCNC_KINK_RATIO, 1.0))
-    return mode, speed, share
+    return mode, speed, share, np.where(mode == 1, run[0], np.nan)
 
 
 def segment_caps(
@@ -775,9 +778,10 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
         limit = np.where(lower, LABELS.index("acceleration X") + axis, limit)
         # the junctions that are not kinks: arc, parabolic blend or kink, the fastest
         share = 1.0 - np.where(tangent, kink, 0.0)
+        blend = np.full(j.size, np.nan)
         choose = np.flatnonzero(~tangent & (tit > 0.0))
         if choose.size:
-            mode, speed, sh = linuxcnc_choice(
+            mode, speed, sh, v_blend = linuxcnc_choice(
                 tp,
                 j[choose],
                 beta[choose],
@@ -795,8 +799,9 @@ def ncperf_evaluate(toolpath: ToolPath, machine: Machine) -> list[Indicator]:
             limit[c] = np.where(mode[other] == 1, len(LABELS), len(LABELS) + 1)
             inserted[c] = 0.0
             share[choose] = sh
+            blend[choose] = v_blend
         labels = (*LABELS, PARABOLIC, KINK)
-        extra = {"acceleration_share": share}
+        extra = {"acceleration_share": share, BLEND_SPEED: blend}
         feed = np.where(tangent & (tit > 0.0), np.inf, feed)
     limit = np.where(tit == 0.0, LABELS.index(NO_BLEND), limit)
     arcs: list[Indicator] = []

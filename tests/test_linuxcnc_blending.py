@@ -297,6 +297,63 @@ def test_a_helix_corner_gets_a_parabolic_blend(nc):
     assert flat_prof.a_up[0] == pytest.approx(2000.0)
 
 
+def test_a_feed_column_through_a_parabolic_blend_shows_both_segments(nc):
+    """The helix corner above as a trace's feed column shows it (LinuxCNC's current_vel is
+    the sum of both segments' speeds while they overlap: tp.c v2.9.8 line 3064). Blend
+    speed v_b = 7.3470 mm/s; the line brakes at a_p = 1000 (halved) to rest at the corner,
+    d_b = v_b^2 / 2000 = 0.026989 mm before it, and from there the helix starts from rest
+    at the acceleration the profile gives it (1012.6 mm/s^2, the test above) for t_b =
+    v_b / 1000 = 7.3470 ms.
+    - 0.1 mm before: the line alone, sqrt(2000 0.1) = 14.142 (the profile, which crosses
+      the corner at u = 2.696, shows sqrt(u^2 + 200) = 14.397);
+    - 0.01 mm before: the line at sqrt(20) = 4.4721, t = (7.3470 - 4.4721) / 1000 =
+      2.8749 ms into the overlap, the helix at 1012.6 t = 2.9111: 7.3832;
+    - 0.001 mm into the helix: t = sqrt(0.002 / 1012.6) = 1.4054 ms, the line at
+      7.3470 - 1.4054 = 5.9416, the helix at 1.4231: 7.3647;
+    - 0.5 mm into the helix, past the overlap: sqrt(2 1012.6 0.5) = 31.821.
+    The profile and its time stay as they were (the corner speed costs the overlap's time)."""
+    pred = nc.predict(helix_corner(), Setup(machine=lcnc(), ramps=True))
+    ev = pred.evaluation
+    assert ev.junction_blend is not None
+    dot = -100.0 / math.hypot(100.0, 1012.6)
+    v_b = 2.0 * math.sqrt(1000.0 * 0.01 / math.sqrt((1.0 - dot) / 2.0))
+    assert ev.junction_blend[ev.junction == 0][0] == pytest.approx(v_b, rel=1e-5)
+    a_n = 2000.0 / (2 * math.pi / math.hypot(2 * math.pi, 1)) / 2
+    s = np.array([10.0 - 0.1, 10.0 - 0.01, 10.0 + 0.001, 10.0 + 0.5])
+    t_before = (v_b - math.sqrt(20.0)) / 1000.0
+    t_after = math.sqrt(0.002 / a_n)
+    expected = [
+        math.sqrt(200.0),
+        math.sqrt(20.0) + a_n * t_before,
+        v_b - 1000.0 * t_after + a_n * t_after,
+        math.sqrt(2 * a_n * 0.5),
+    ]
+    assert expected == pytest.approx([14.142, 7.3832, 7.3647, 31.821], abs=2e-3)
+    assert pred.speed_at(s) == pytest.approx(expected, abs=2e-3)
+    assert pred.profile.speed_at(s[:1]) == pytest.approx([14.397], abs=2e-3)
+    # far from the corner the two are one
+    far = np.array([5.0, 13.0])
+    assert pred.speed_at(far) == pytest.approx(pred.profile.speed_at(far), abs=1e-12)
+    # a blend arc overlaps nothing
+    flat = nc.predict(helix_corner(rise=0.0), Setup(machine=lcnc(), ramps=True))
+    assert flat.evaluation.junction_blend is None
+
+
+def test_the_column_through_an_overlap_closed_forms():
+    """overlap_column by hand: v_b 6, a_p 500, a_n 1000 mm/s^2 (d_b = 0.036 mm, t_b = 12 ms):
+    before, 0.1 mm: sqrt(100) = 10, not in the overlap; 0.009 mm: the first at 3, 6 ms in,
+    the second at 6: 9; 0.036 mm: 6 either way. After, 0.0005 mm: 1 ms in, 6 - 0.5 + 1 =
+    6.5; 0.072 mm: t_b, 0 + 12 = 12 either way; 0.2 mm: 20 ms, the second alone: 20."""
+    from core.engine.predict import overlap_column
+
+    col, inside = overlap_column([0.1, 0.009, 0.036 - 1e-12], 6.0, 500.0, 1000.0, before=True)
+    assert col == pytest.approx([10.0, 9.0, 6.0], abs=1e-6)
+    assert list(inside) == [False, True, True]
+    col, inside = overlap_column([0.0005, 0.072 + 1e-12, 0.2], 6.0, 500.0, 1000.0, before=False)
+    assert col == pytest.approx([6.5, 12.0, 20.0], abs=1e-6)
+    assert list(inside) == [True, False, False]
+
+
 def slow_servo(servo):
     return dataclasses.replace(lcnc(), interpolation_time=servo * 1.02)
 

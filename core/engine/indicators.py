@@ -65,7 +65,9 @@ class Indicator:
         the indicator's feed (model 1: the inserted arc's tangent length; model 2: the
         distance run during the transition time), and optionally ``travel_mm``, the length
         the tool actually runs over each side of it (model 1: half the inserted arc,
-        R beta / 2, shorter than the programmed R tan(beta / 2); default ``hold_mm``).
+        R beta / 2, shorter than the programmed R tan(beta / 2); default ``hold_mm``);
+        and optionally :data:`BLEND_SPEED` at junctions the planner runs as an overlap (NaN
+        elsewhere).
     """
 
     name: str
@@ -102,6 +104,15 @@ class Indicator:
         object.__setattr__(self, "limit", limit)
         object.__setattr__(self, "labels", tuple(self.labels))
 
+
+#: Junction value (mm/s) where the planner overlaps the two segments (LinuxCNC's parabolic
+#: blend, tp.c ``tpDoParabolicBlending``): the segment before brakes to rest at the
+#: junction, and once it is down to this speed the segment after starts from rest, the two
+#: motions added. Where the indicator that gives it binds, the evaluation keeps it
+#: (:attr:`Evaluation.junction_blend`); the feed profile is unchanged (its junction speed
+#: is the one that costs the overlap's time), the speed a trace shows there is not
+#: (:func:`core.engine.predict.overlap_column`).
+BLEND_SPEED = "blend_speed_mm_s"
 
 #: What produces the A2 results of a tool path on a machine: every registered plugin's
 #: indicators (:meth:`core.facade.Ncperf.indicators`). The engine takes it as an argument
@@ -155,6 +166,9 @@ class Evaluation:
         the programmed feeds cap it -- the limit of the arc LinuxCNC inserts there, which it
         runs up to whatever the feeds on either side (the arc's requested speed is the
         higher of the two: blendmath.c ``blendParamKinematics``); None elsewhere.
+    junction_blend : (m,) float, mm/s, or None
+        The binding indicator's :data:`BLEND_SPEED` at junctions the planner runs as an
+        overlap of the two segments, NaN at the others; None where none is.
     """
 
     toolpath: ToolPath
@@ -175,6 +189,7 @@ class Evaluation:
     blend_rest: NDArray[np.float64] | None = None
     acceleration_share: NDArray[np.float64] | None = None
     junction_arc_feed: NDArray[np.float64] | None = None
+    junction_blend: NDArray[np.float64] | None = None
 
     @cached_property
     def junction_reduction(self) -> NDArray[np.float64]:
@@ -414,6 +429,20 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         if ind.at == "element" and "acceleration_share" in ind.values:
             acc_share = np.ones(tp.n) if acc_share is None else acc_share
             acc_share[ind.index] *= np.asarray(ind.values["acceleration_share"], dtype=np.float64)
+    junction_blend = None
+    for ind in indicators:
+        if ind.at == "junction" and BLEND_SPEED in ind.values:
+            v_b = np.asarray(ind.values[BLEND_SPEED], dtype=np.float64)
+            have = np.flatnonzero(np.isfinite(v_b))
+            if have.size == 0:
+                continue
+            # where this indicator binds (names the junction, below the programmed feeds)
+            at = np.searchsorted(j, ind.index[have])
+            binds = (jind[at] == names.index(ind.name)) & (jlim[at] != 0)
+            if binds.any():
+                if junction_blend is None:
+                    junction_blend = np.full(j.size, np.nan)
+                junction_blend[at[binds]] = v_b[have[binds]]
     efeed = tp.feed.copy()
     eind = np.full(tp.n, -1, dtype=CODE)
     elim = np.full(tp.n, -1, dtype=CODE)
@@ -445,4 +474,5 @@ def combine(toolpath: ToolPath, machine: Machine, indicators: Sequence[Indicator
         blend_rest=blend_rest,
         acceleration_share=acc_share,
         junction_arc_feed=arc_feed,
+        junction_blend=junction_blend,
     )

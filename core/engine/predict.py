@@ -71,9 +71,47 @@ class Prediction:
 
     def _raw_speed_at(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
         if self.profile is not None:
-            return self.profile.speed_at(s)
+            v = self.profile.speed_at(s)
+            if self.evaluation.junction_blend is not None:
+                v = self._through_overlaps(s, v)
+            return v
         k = self.toolpath.move_at(s)
         return self.block_speed[k]
+
+    def _through_overlaps(self, s: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray:
+        """The speeds ``v`` at arc lengths ``s`` with those near junctions the planner runs
+        as an overlap of the two segments (:data:`core.engine.indicators.BLEND_SPEED`) as a
+        trace shows them (:func:`overlap_column`). The profile crosses such a junction at
+        the speed that costs the overlap's time; the blend speed is taken lower alike where
+        the profile's look-ahead crosses it lower than the evaluation."""
+        ev, pr, tp = self.evaluation, self.profile, self.toolpath
+        assert ev.junction_blend is not None and pr is not None
+        have = np.flatnonzero(np.isfinite(ev.junction_blend))
+        jj = ev.junction[have]
+        u = ev.junction_feed[have]
+        with np.errstate(divide="ignore", invalid="ignore"):
+            scale = np.where(u > 0.0, np.clip(pr.v_exit[jj] / u, 0.0, 1.0), 0.0)
+        v_b = ev.junction_blend[have] * scale
+        a_p, a_n = pr.a_down[jj], pr.a_up[jj + 1]
+        k = tp.move_at(s)
+        v = v.copy()
+        for before in (True, False):
+            # samples on the move before a blend (it ends there) or after one (it starts)
+            at = k if before else k - 1
+            i = np.clip(np.searchsorted(jj, at), 0, max(jj.size - 1, 0))
+            sel = np.flatnonzero((jj.size > 0) & (jj[i] == at))
+            if sel.size == 0:
+                continue
+            ii, kk = i[sel], k[sel]
+            if before:
+                into = tp.start_s[kk] + tp.length[kk] - s[sel]
+            else:
+                into = s[sel] - tp.start_s[kk]
+            col, inside = overlap_column(
+                np.maximum(into, 0.0), v_b[ii], a_p[ii], a_n[ii], before=before
+            )
+            v[sel] = np.where(inside, col, np.fmin(v[sel], col))
+        return v
 
     @cached_property
     def _filtered(self) -> tuple[NDArray, NDArray, NDArray, NDArray] | None:
@@ -90,7 +128,9 @@ class Prediction:
         the alignment took a trace's column as the commanded feed): the planner's path
         speed through the setpoint filter alone, in time (on a circle it stays the
         programmed feed while the filtered positions run a smaller circle more slowly; the
-        position loop's lag is behind the command and does not reach it).
+        position loop's lag is behind the command and does not reach it; through a junction
+        the planner runs as an overlap of two segments, their speeds' sum:
+        :meth:`_through_overlaps`).
         """
         su = self.setup
         if su.servo_tau <= 0 and su.filter_window <= 0:
@@ -112,6 +152,9 @@ class Prediction:
         kept: dict = self.shared.setdefault("filtered", {})
         if key in kept:
             return kept[key]
+        if self.evaluation.junction_blend is not None:
+            # the planner's speed as its column shows it through overlaps of two segments
+            v_raw = self._through_overlaps(s, v_raw)
         s = np.concatenate([np.full(head, s[0]), s, np.full(tail, s[-1])])
         t = (np.arange(s.size) - head) * dt + t[0]
         # (the points of the padded arc lengths: those of the ends repeated)
@@ -181,6 +224,45 @@ class Prediction:
             return self.profile.cycle_time
         tp = self.toolpath
         return float(np.sum(tp.length / self.block_speed) + tp.dwell.sum())
+
+
+def overlap_column(
+    d: ArrayLike, v_b: ArrayLike, a_p: ArrayLike, a_n: ArrayLike, *, before: bool
+) -> tuple[NDArray[np.float64], NDArray[np.bool_]]:
+    """The speed a trace's feed column shows at distance ``d`` (mm) before (``before``) or
+    after a junction the planner runs as an overlap (LinuxCNC's parabolic blend, tp.c
+    ``tpDoParabolicBlending``), and whether that place is inside the overlap.
+
+    The segment before brakes at ``a_p`` (mm/s^2) to rest at the junction; when it is down
+    to its blend speed ``v_b`` (mm/s), d_b = v_b^2 / (2 a_p) before the junction, the
+    segment after starts from rest at ``a_n`` and the column shows the sum of the two
+    speeds (``current_vel = tc->currentvel + nexttc->currentvel``, tp.c v2.9.8 line 3064)
+    until the first stops, t_b = v_b / a_p later. A place is read as the distance the
+    segment it lies on has left (before) or run (after) -- a trace's positions projected
+    on the path at a right-angle corner; at other angles near enough:
+
+    - before, d > d_b: the first alone, sqrt(2 a_p d);
+    - before, d <= d_b: v1 = sqrt(2 a_p d) at t = (v_b - v1) / a_p into the overlap,
+      the column v1 + a_n t;
+    - after, t = sqrt(2 d / a_n) < t_b: the column v_b - a_p t + a_n t;
+    - after, past the overlap: the second alone, a_n t = sqrt(2 a_n d).
+
+    Outside the overlap this is the profile of a stop at the junction: the profile's own
+    speed, which crosses it at the speed that costs the same time, is higher there and the
+    caller takes the lower of the two."""
+    d = np.asarray(d, dtype=np.float64)
+    v_b, a_p, a_n = (np.asarray(x, dtype=np.float64) for x in (v_b, a_p, a_n))
+    with np.errstate(divide="ignore", invalid="ignore"):
+        if before:
+            v1 = np.sqrt(2.0 * a_p * d)
+            inside = v1 < v_b
+            col = np.where(inside, v1 + a_n * (v_b - v1) / a_p, v1)
+        else:
+            t = np.sqrt(2.0 * d / a_n)
+            inside = t < v_b / a_p
+            col = np.where(inside, v_b + (a_n - a_p) * t, a_n * t)
+    ok = np.isfinite(col)
+    return np.where(ok, col, np.inf), inside & ok
 
 
 def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:
