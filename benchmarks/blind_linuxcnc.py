@@ -1,7 +1,7 @@
 """The blind diagnosis benchmark: programs and settings the diagnosis was not tuned on.
 
 Not a test: ``python benchmarks/blind_linuxcnc.py --seeds SET [--jobs 2] [--only N]`` (SET:
-tune, score, score2-score8, drawn7-drawn48; needs LinuxCNC and ../shared/tools/linuxcnc; the
+tune, score, score2-score8, drawn7-drawn49; needs LinuxCNC and ../shared/tools/linuxcnc; the
 traces are recorded in real time, about 25 min per seed set, and cached).
 
 Programs come from ten families (benchmarks/blind/families.py: random polygons, trochoidal
@@ -12,7 +12,7 @@ and ``score`` (seeds 9000-9999), ``score2`` (seeds 20000-20999), ``score3`` (300
 ``score4`` (40000-40999), ``score5`` (50000-50999), ``score6`` (60000-60999), ``score7``
 (5000000-5000999), ``score8`` (6000000-6000999) and
 ``drawn7`` (70500-71009; each case's setting drawn from a range instead of the fixed values)
-and ``drawn8`` to ``drawn48`` (80500-, 90500-, ..., 480500-; the same kind),
+and ``drawn8`` to ``drawn49`` (80500-, 90500-, ..., 490500-; the same kind),
 each run for the figures in the README (the README says which were looked at afterwards).
 Every case is one program run through LinuxCNC 2.9's real planner on the harness's default
 mill with ONE setting changed (per-axis acceleration or speed, servo period, the path
@@ -68,9 +68,12 @@ INI = SHARED / "tools" / "linuxcnc" / "machines" / "default_mill_mm.ini"
 #: cache), with a24fb61's harness, the first fixed-setting set since score6, before any of
 #: its traces was looked at; diagnosed once, at 35fa3b9 (12:50-12:57 UTC).
 #: ``drawn48`` and ``score8`` (seeds 6000000-6000509, the fixed settings): recorded on
-#: 2026-11-28 (14:27-14:51 and from 14:51 UTC) with a24fb61's harness, record only, while
+#: 2026-11-28 (14:27-14:51 and 14:51-15:15 UTC) with a24fb61's harness, record only, while
 #: the feed column through parabolic blends (9ebf519) was written and checked on score7,
-#: drawn46 and drawn47, before any of their traces was looked at.
+#: drawn46 and drawn47, before any of their traces was looked at; diagnosed once each, at
+#: 3c22c71 (15:24-15:36 UTC). ``drawn49``: recorded 15:36-16:00 UTC (the same harness,
+#: record only) after those two had been diagnosed, with no change to the diagnosis since,
+#: before any of its traces was looked at.
 SEEDS = {
     "tune": 100,
     "score": 9000,
@@ -123,6 +126,7 @@ SEEDS = {
     "drawn47": 470500,
     "drawn48": 480500,
     "score8": 6000000,
+    "drawn49": 490500,
 }
 #: Programs per changed setting.
 PER_VARIANT = 4
