@@ -78,28 +78,38 @@ class Prediction:
         k = self.toolpath.move_at(s)
         return self.block_speed[k]
 
-    def _through_overlaps(self, s: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray:
-        """The speeds ``v`` at arc lengths ``s`` with those near junctions the planner runs
-        as an overlap of the two segments (:data:`core.engine.indicators.BLEND_SPEED`) as a
-        trace shows them (:func:`overlap_column`). The profile crosses such a junction at
-        the speed that costs the overlap's time; the blend speed is taken lower alike where
-        the profile's look-ahead crosses it lower than the evaluation."""
-        ev, pr, tp = self.evaluation, self.profile, self.toolpath
+    @cached_property
+    def _overlaps(self) -> tuple[NDArray, NDArray, NDArray, NDArray]:
+        """(junctions, blend speeds, a_p, a_n) of the junctions the planner runs as an
+        overlap of the two segments (:data:`core.engine.indicators.BLEND_SPEED`), ascending;
+        made once per prediction, read by every :meth:`_through_overlaps`. The profile
+        crosses such a junction at the speed that costs the overlap's time; the blend speed
+        is taken lower alike where the profile's look-ahead crosses it lower than the
+        evaluation."""
+        ev, pr = self.evaluation, self.profile
         assert ev.junction_blend is not None and pr is not None
         have = np.flatnonzero(np.isfinite(ev.junction_blend))
         jj = ev.junction[have]
         u = ev.junction_feed[have]
         with np.errstate(divide="ignore", invalid="ignore"):
             scale = np.where(u > 0.0, np.clip(pr.v_exit[jj] / u, 0.0, 1.0), 0.0)
-        v_b = ev.junction_blend[have] * scale
-        a_p, a_n = pr.a_down[jj], pr.a_up[jj + 1]
+        return jj, ev.junction_blend[have] * scale, pr.a_down[jj], pr.a_up[jj + 1]
+
+    def _through_overlaps(self, s: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray:
+        """The speeds ``v`` at arc lengths ``s`` with those near junctions the planner runs
+        as an overlap of the two segments (:attr:`_overlaps`) as a trace shows them
+        (:func:`overlap_column`)."""
+        jj, v_b, a_p, a_n = self._overlaps
+        if jj.size == 0:
+            return v
+        tp = self.toolpath
         k = tp.move_at(s)
         v = v.copy()
         for before in (True, False):
             # samples on the move before a blend (it ends there) or after one (it starts)
             at = k if before else k - 1
-            i = np.clip(np.searchsorted(jj, at), 0, max(jj.size - 1, 0))
-            sel = np.flatnonzero((jj.size > 0) & (jj[i] == at))
+            i = np.minimum(np.searchsorted(jj, at), jj.size - 1)
+            sel = np.flatnonzero(jj[i] == at)
             if sel.size == 0:
                 continue
             ii, kk = i[sel], k[sel]
