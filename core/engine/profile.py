@@ -59,6 +59,8 @@ from core.engine.lookahead import lazy_caps
 from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
 from core.model.jit import compiled
+from core.model.native import SPLIT, side_by_side, two_cores
+from core.model.native import kernels as round_kernels
 from core.model.pieces import PIECE, pieces, piecewise
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
@@ -857,8 +859,8 @@ def _passes_of(
     too."""
     n1 = b2.size
     w, bwd = (np.empty(n1), np.empty(n1)) if work is None else work
-    kernels = compiled() if finite and n1 else None
-    if kernels is not None:  # the same sums and minima move by move (core.model.jit)
+    kernels = round_kernels() if finite and n1 else None
+    if kernels is not None:  # the same sums and minima move by move (core.model.native)
         out = np.empty(n1) if out is None else out
         kernels.plain_passes(b2, up, dn, w, bwd, out)
         return out
@@ -1202,9 +1204,30 @@ class _Rounds:
         self.moved = []
         peak, rise, fall, through_up, through_dn = self.marks
         v0, v1 = v[:-1], v[1:]
+        if near is None and self._parallel() and self._dense_ok(rise) and self._dense_ok(fall):
+            # Both directions dense, each on its own columns (a_up, term_up, ... and
+            # a_dn, ...), the kernels letting go of the GIL: on two threads. Their
+            # ``finite`` (whether all terms are plain) is one flag that only falls: the
+            # two results' conjunction is what one after the other gives.
+            finite = self.finite
+            (change_up, fin_up), (change_dn, fin_dn) = side_by_side(
+                lambda: self._dense(True, rise, through_up, v0, v1, peak, finite),
+                lambda: self._dense(False, fall, through_dn, v0, v1, peak, finite),
+            )
+            self.finite = fin_up and fin_dn
+            return max(change_up, change_dn)
         change_up = self._direction(True, rise, through_up, v0, v1, peak, near)
         change_dn = self._direction(False, fall, through_dn, v0, v1, peak, near)
         return max(change_up, change_dn)
+
+    def _parallel(self) -> bool:
+        """Whether a round's two directions go on two threads: kernels that let go of the
+        GIL (numpy's pieces hold it), enough moves to repay a thread, two cores."""
+        return self.acc.size >= SPLIT and round_kernels() is not None and two_cores()
+
+    def _dense_ok(self, phase: NDArray) -> bool:
+        """Whether :meth:`_direction` (all marks new) takes :meth:`_dense` for ``phase``."""
+        return bool(DENSE_SHARE * np.count_nonzero(phase) > phase.size)
 
     def _update_marks(self, v: NDArray) -> NDArray | None:
         """The marks of :meth:`_all_marks` made again where a move's boundary speeds or
@@ -1229,8 +1252,8 @@ class _Rounds:
         if 2 * at.size > n:
             self.marks = self._all_marks(v)
             return None
-        kernels = compiled()
-        if kernels is not None:  # the same operations move by move (core.model.jit)
+        kernels = round_kernels()
+        if kernels is not None:  # the same operations move by move (core.model.native)
             kernels.marks(
                 at, False, v, self.a_up, self.a_dn, self.holds.between, self.cap,
                 (TOL.rel_equal, TOL.nil_distance), self.marks,
@@ -1268,8 +1291,8 @@ class _Rounds:
         # start (falling) and so links its ramp to the next or the previous move
         through_up = np.zeros(n + 1, dtype=bool)
         through_dn = np.zeros(n + 1, dtype=bool)
-        kernels = compiled()
-        if kernels is not None:  # the same operations move by move (core.model.jit)
+        kernels = round_kernels()
+        if kernels is not None:  # the same operations move by move (core.model.native)
             out = (peak, rise, fall, through_up, through_dn)
             kernels.marks(
                 np.zeros(0, dtype=np.intp), True, v, a_up, a_dn, between, self.cap,
@@ -1421,8 +1444,9 @@ class _Rounds:
         acc = self.acc
         off = self.off_up if rising else self.off_dn
         found = None if near is None else self._local(rising, near, v0, v1, peak)
-        if found is None and DENSE_SHARE * np.count_nonzero(phase) > a.size:
-            return self._dense(rising, phase, through, v0, v1, peak)
+        if found is None and self._dense_ok(phase):
+            change, self.finite = self._dense(rising, phase, through, v0, v1, peak, self.finite)
+            return change
         cand: NDArray | slice
         if found is None:
             cand, new, old = self._everywhere(rising, phase, through, v0, v1, peak)
@@ -1452,7 +1476,7 @@ class _Rounds:
         self._keep_round(rising, step, cand, kept)
         return change
 
-    def _dense(self, rising, phase, through, v0, v1, peak) -> float:
+    def _dense(self, rising, phase, through, v0, v1, peak, finite) -> tuple[float, bool]:
         """:meth:`_direction` over every move at once where most moves are in a ramp phase
         (stellabee1: three in four): the targets, the damping and the updates made on whole
         columns in pieces (their temporaries in the cache), not gathered on the candidates.
@@ -1463,7 +1487,11 @@ class _Rounds:
         step is nil (sign 0, the same acceleration), and a nil step changes nothing: no
         move, no term, a step sign 0, a relative change 0 (or NaN, which ``nanmax``
         skips). The signs are read from comparisons (``sign(x - y)`` of doubles is the sign
-        of ``x`` against ``y``, and 0 where NaN as the int8 cast gives)."""
+        of ``x`` against ``y``, and 0 where NaN as the int8 cast gives).
+
+        ``finite``: whether the pass terms are plain so far (:attr:`finite`); returns the
+        largest relative change and that flag after this direction's terms (the caller
+        keeps it: :meth:`step` runs the two directions side by side)."""
         if rising:
             a, last, term, off = self.a_up, self.step_up, self.term_up, self.off_up
             self.last_up = None  # (kept by _effective for sparse ramps only)
@@ -1472,22 +1500,21 @@ class _Rounds:
             self.last_dn = None
         acc, jerk, between = self.acc, self.jerk, self.holds.between
         n = a.size
-        kernels = compiled()
-        if kernels is not None:  # the same operations move by move (core.model.jit)
+        kernels = round_kernels()
+        if kernels is not None:  # the same operations move by move (core.model.native)
             step = np.empty(n, dtype=np.int8)
             moved = np.empty(n, dtype=bool)
-            change, self.finite, at, want = kernels.dense_round(
+            change, finite, at, want = kernels.dense_round(
                 rising, phase, through, v0, v1, peak, a, last, term, off, acc, jerk,
-                between, step, moved, CACHE_PIECE, TOL.nil_speed, self.finite,
+                between, step, moved, CACHE_PIECE, TOL.nil_speed, finite,
             )  # fmt: skip
             self._keep_round(rising, step, moved, (at, want))
-            return float(change)
+            return float(change), bool(finite)
         dv = _chain_dv(rising, phase, through, v0, v1, peak)
         step = np.empty(n, dtype=np.int8)
         moved = np.empty(n, dtype=bool)
         at_behind, wanted = [], []
         change = 0.0
-        finite = self.finite
         for s in pieces(n, CACHE_PIECE):
             od = a[s]  # (a view: written where the acceleration moves)
             new = effective_acceleration(dv[s], acc[s], jerk[s], phase[s])  # the targets
@@ -1529,13 +1556,12 @@ class _Rounds:
             term[s] = tm
             if finite and not _plain_terms(tm):  # (the others were plain)
                 finite = False
-        self.finite = finite
         behind = (
             np.concatenate(at_behind) if at_behind else np.zeros(0, dtype=np.intp),
             np.concatenate(wanted) if wanted else np.zeros(0),
         )
         self._keep_round(rising, step, moved, behind)
-        return change
+        return change, finite
 
     def _keep_round(
         self, rising: bool, step: NDArray, moved: NDArray | slice, behind: tuple[NDArray, NDArray]

@@ -1,0 +1,245 @@
+"""The C kernels (``core/model/_kernels.c``), loaded with ctypes, where they were built.
+
+``pip install`` builds them where it finds a C compiler (an optional extension in
+pyproject.toml: without a compiler the install goes on without them). They are the feed
+profile's rounds (the marks, the dense rounds of the jerk iteration, the passes) move by
+move with the same IEEE-754 operations in the same order as numpy's code: the same bits
+(``tests/test_native.py``). Unlike numba's kernels (:mod:`core.model.jit`), which cost
+0.4 s to import and so serve the diagnosis only, these load in about a millisecond: every
+``ncperf analyze`` takes them (issue 13). ctypes lets go of the GIL while a kernel runs,
+so the profile runs the rounds' two directions on two threads.
+
+:func:`native` is None where the library is absent (no compiler at install, another
+platform), was built for another version of this interface, or ``NCPERF_NO_JIT`` asks for
+numpy's code: numpy's code runs there, with the same results.
+"""
+
+from __future__ import annotations
+
+import ctypes
+import importlib.machinery
+import os
+import sys
+import threading
+from collections.abc import Callable
+from functools import cache
+from pathlib import Path
+from types import ModuleType
+from typing import TypeVar
+
+import numpy as np
+from numpy.typing import NDArray
+
+from core.model.jit import compiled, disabled
+
+#: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
+#: another version of the source is not loaded.
+VERSION = 1
+
+T = TypeVar("T")
+U = TypeVar("U")
+
+_P = ctypes.c_void_p
+_I = ctypes.c_int64
+_D = ctypes.c_double
+
+
+def _ptr(x: NDArray, dtype: type) -> int:
+    """The address of a contiguous array of ``dtype`` (the kernels write into some of them
+    in place: a copy would lose what they write, so none is made)."""
+    if x.dtype != dtype or not x.flags.c_contiguous:
+        raise TypeError(f"C kernel argument: {x.dtype} {x.shape}, not contiguous {dtype}")
+    return int(x.ctypes.data)
+
+
+class Kernels:
+    """The library's kernels with the arguments of :mod:`core.model.compiled`'s."""
+
+    def __init__(self, lib: ctypes.CDLL) -> None:
+        self.lib = lib
+        lib.marks.argtypes = [_P, _I, _I, ctypes.c_int, *[_P] * 5, _D, _D, *[_P] * 5]
+        lib.marks.restype = None
+        lib.dense_round.argtypes = [ctypes.c_int, _I, *[_P] * 14, _I, _D, *[_P] * 6]
+        lib.dense_round.restype = _I
+        lib.plain_passes.argtypes = [_I, *[_P] * 6]
+        lib.plain_passes.restype = None
+
+    def marks(
+        self,
+        at: NDArray,
+        every: bool,
+        v: NDArray,
+        a_up: NDArray,
+        a_dn: NDArray,
+        between: NDArray,
+        cap: NDArray,
+        tols: tuple[float, float],
+        out: tuple[NDArray, NDArray, NDArray, NDArray, NDArray],
+    ) -> None:
+        """core.engine.profile._Rounds._all_marks (``every``) or _marks_of the moves ``at``
+        into ``out`` = (peak, rise, fall, through_up, through_dn)."""
+        f, b = np.float64, np.bool_
+        n = a_up.size
+        if v.size != n + 1 or not (a_dn.size == between.size == cap.size == n):
+            raise ValueError("C kernel marks: columns of different lengths")
+        peak, rise, fall, t_up, t_dn = out
+        if not (peak.size == rise.size == fall.size == n and t_up.size == t_dn.size == n + 1):
+            raise ValueError("C kernel marks: outputs of different lengths")
+        count = n if every else at.size
+        if not every and count and not (0 <= int(at.min()) and int(at.max()) < n):
+            raise IndexError("C kernel marks: a move out of range")
+        args = (
+            _ptr(at, np.intp) if at.size else None, count, int(every),
+            _ptr(v, f), _ptr(a_up, f), _ptr(a_dn, f), _ptr(between, f), _ptr(cap, f),
+            tols[0], tols[1],
+            _ptr(peak, f), _ptr(rise, b), _ptr(fall, b), _ptr(t_up, b), _ptr(t_dn, b),
+        )  # fmt: skip
+        ptr, _, every_, *rest = args
+        if count < 2 * SPLIT or not two_cores():
+            self.lib.marks(ptr, 0, count, every_, *rest)
+            return
+        # each move's marks its own: the halves on two threads (disjoint outputs)
+        half = count // 2
+        side_by_side(
+            lambda: self.lib.marks(ptr, 0, half, every_, *rest),
+            lambda: self.lib.marks(ptr, half, count - half, every_, *rest),
+        )
+
+    def dense_round(
+        self,
+        rising: bool,
+        phase: NDArray,
+        through: NDArray,
+        v0: NDArray,
+        v1: NDArray,
+        peak: NDArray,
+        a: NDArray,
+        last: NDArray,
+        term: NDArray,
+        off: NDArray,
+        acc: NDArray,
+        jerk: NDArray,
+        between: NDArray,
+        step: NDArray,
+        moved: NDArray,
+        piece: int,
+        nil_speed: float,
+        finite: bool,
+    ) -> tuple[float, bool, NDArray, NDArray]:
+        """core.engine.profile._Rounds._dense: as :func:`core.model.compiled.dense_round`
+        (``a``, ``off``, ``term`` in place, ``step`` and ``moved`` written; the largest
+        relative change, whether the terms are still plain, the moves the damping held
+        back and their targets)."""
+        f, b = np.float64, np.bool_
+        n = a.size
+        cols = (phase, v0, v1, peak, last, term, off, acc, jerk, between, step, moved)
+        if through.size != n + 1 or any(c.size != n for c in cols) or piece < 1:
+            raise ValueError("C kernel dense_round: columns of different lengths")
+        behind = np.empty(n, dtype=np.intp)
+        wanted = np.empty(n)
+        work = np.empty(3 * n)
+        cont = np.empty(n + 1, dtype=np.bool_)
+        fin = ctypes.c_int(int(finite))
+        change = ctypes.c_double(0.0)
+        count = self.lib.dense_round(
+            int(rising), n, _ptr(phase, b), _ptr(through, b),
+            _ptr(v0, f), _ptr(v1, f), _ptr(peak, f), _ptr(a, f), _ptr(last, np.int8),
+            _ptr(term, f), _ptr(off, b), _ptr(acc, f), _ptr(jerk, f), _ptr(between, f),
+            _ptr(step, np.int8), _ptr(moved, b), piece, nil_speed,
+            ctypes.addressof(fin), ctypes.addressof(change),
+            _ptr(behind, np.intp), _ptr(wanted, f), _ptr(work, f), _ptr(cont, b),
+        )  # fmt: skip
+        return change.value, bool(fin.value), behind[:count].copy(), wanted[:count].copy()
+
+    def plain_passes(
+        self, b2: NDArray, up: NDArray, dn: NDArray, w: NDArray, bwd: NDArray, out: NDArray
+    ) -> None:
+        """core.engine.profile._passes_of with ``finite``, into ``out``."""
+        f = np.float64
+        n1 = b2.size
+        if n1 == 0 or not (up.size == dn.size == n1 - 1 and w.size == bwd.size == out.size == n1):
+            raise ValueError("C kernel plain_passes: columns of different lengths")
+        self.lib.plain_passes(
+            n1, _ptr(b2, f), _ptr(up, f), _ptr(dn, f), _ptr(w, f), _ptr(bwd, f), _ptr(out, f)
+        )
+
+
+#: Moves below which a kernel's work is not split over two threads (starting one costs
+#: about 0.1 ms, the marks of 20k moves about 0.5 ms).
+SPLIT = 20_000
+
+
+@cache
+def two_cores() -> bool:
+    """Whether this process may run on two cores or more."""
+    try:
+        return len(os.sched_getaffinity(0)) >= 2
+    except AttributeError:  # (no sched_getaffinity: macOS, Windows)
+        return (os.cpu_count() or 1) >= 2
+
+
+def side_by_side(first: Callable[[], T], second: Callable[[], U]) -> tuple[T, U]:
+    """``first()`` on a new thread while this one runs ``second()``; both results (an
+    exception of either is raised here, after both ended). For kernels that let go of the
+    GIL (ctypes' calls, numba's nogil kernels) and write disjoint outputs."""
+    box: list = []
+
+    def run() -> None:
+        try:
+            box.append((True, first()))
+        except BaseException as exc:  # (raised again in the caller's thread)
+            box.append((False, exc))
+
+    thread = threading.Thread(target=run, name="ncperf-kernel", daemon=True)
+    thread.start()
+    try:
+        two = second()
+    finally:
+        thread.join()
+    ok, one = box[0]
+    if not ok:
+        raise one
+    return one, two
+
+
+def library_path() -> Path | None:
+    """Where the built library is (beside this file, named as a Python extension), or
+    None."""
+    here = Path(__file__).parent
+    for suffix in importlib.machinery.EXTENSION_SUFFIXES:
+        path = here / f"_kernels{suffix}"
+        if path.is_file():
+            return path
+    return None
+
+
+@cache
+def _load() -> Kernels | None:
+    if sys.maxsize != 2**63 - 1:  # (int64_t is intp on 64-bit platforms only)
+        return None
+    path = library_path()
+    if path is None:
+        return None
+    try:
+        lib = ctypes.CDLL(str(path))
+        lib.ncperf_kernels_version.restype = ctypes.c_int64
+        if lib.ncperf_kernels_version() != VERSION:
+            return None
+        return Kernels(lib)
+    except (OSError, AttributeError):  # not loadable here, or not this library
+        return None
+
+
+def native() -> Kernels | None:
+    """The C kernels, or None: not built, not loadable, or ``NCPERF_NO_JIT`` set (read at
+    every call, so a test may switch)."""
+    if disabled():
+        return None
+    return _load()
+
+
+def kernels() -> ModuleType | Kernels | None:
+    """The kernels the profile's rounds take: numba's where the diagnosis allowed them
+    (:func:`core.model.jit.compiled`: loaded anyway there), else the C kernels, else None
+    (numpy's code). All three give the same bits."""
+    return compiled() or native()

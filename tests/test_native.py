@@ -1,0 +1,269 @@
+"""The C kernels (core/model/_kernels.c, loaded by core.model.native) against numpy's code
+they stand in for: the same bits, on random columns with the values that trip arithmetic
+up (NaN, infinities, zeros of both signs, huge and tiny numbers) and on whole profiles,
+with the rounds' two directions on two threads. Skipped where the library was not built
+(no C compiler at install), unless NCPERF_REQUIRE_NATIVE is set (CI sets it: there a
+missing build is a failure, not a skip)."""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+
+import numpy as np
+import pytest
+
+import core.engine.profile as prof
+import core.model.native as nat
+from core import Ncperf, load_preset
+from core.engine.profile import Profile, build_profile
+from core.model.jit import NO_JIT_ENV
+from core.model.tolerances import TOL
+from tests.conftest import ROOT, shared
+
+if nat.native() is None:
+    if os.environ.get("NCPERF_REQUIRE_NATIVE"):
+        raise RuntimeError(f"the C kernels were not built or do not load ({nat.library_path()})")
+    pytest.skip("the C kernels were not built (no C compiler at install)", allow_module_level=True)
+
+EXAMPLES = sorted((ROOT / "examples").glob("*.ngc"))
+
+
+@pytest.fixture(autouse=True)
+def _c_not_numba(monkeypatch):
+    """The C kernels where kernels run: numba's (allowed by other tests' diagnoses in this
+    process) would stand in first."""
+    monkeypatch.setattr(nat, "compiled", lambda: None)
+
+
+def _bits(x: np.ndarray) -> np.ndarray:
+    x = np.ascontiguousarray(x)
+    return x.view(np.int64) if x.dtype == np.float64 else x
+
+
+def _same(a: object, b: object, what: str = "") -> None:
+    if isinstance(a, tuple | list):
+        assert isinstance(b, type(a)) and len(a) == len(b), what
+        for i, (x, y) in enumerate(zip(a, b, strict=True)):
+            _same(x, y, f"{what}[{i}]")
+    elif isinstance(a, np.ndarray):
+        assert isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape, what
+        np.testing.assert_array_equal(_bits(a), _bits(b), err_msg=what)
+    elif dataclasses.is_dataclass(a):
+        assert type(a) is type(b), what
+        for f in dataclasses.fields(a):
+            _same(getattr(a, f.name), getattr(b, f.name), f"{what}.{f.name}")
+    elif isinstance(a, float) and a != a:
+        assert isinstance(b, float) and b != b, what
+    else:
+        assert a == b, what
+
+
+def _numpy_then_c(monkeypatch, fn):
+    """``fn()`` with numpy's code, then with the C kernels."""
+    monkeypatch.setenv(NO_JIT_ENV, "1")
+    assert nat.kernels() is None
+    plain = fn()
+    monkeypatch.delenv(NO_JIT_ENV)
+    assert isinstance(nat.kernels(), nat.Kernels)
+    return plain, fn()
+
+
+def _tricky(rng: np.random.Generator, n: int, lo: float, hi: float, share: float) -> np.ndarray:
+    """n values uniform in [lo, hi), a ``share`` of them replaced by awkward ones."""
+    x = rng.uniform(lo, hi, n)
+    odd = np.array([0.0, -0.0, np.inf, -np.inf, np.nan, 1e-300, 1e300, 5e-324, -1.0, 1.0])
+    k = rng.random(n) < share
+    x[k] = rng.choice(odd, int(k.sum()))
+    return x
+
+
+def test_marks_are_numpys_on_awkward_columns():
+    """The marks of every move and of some, against _marks_of (numpy), element for element:
+    NaN, infinities, signed zeros and extremes in every column."""
+    rng = np.random.default_rng(13)
+    lib = nat.native()
+    assert lib is not None
+    for n, share in ((1, 0.5), (17, 0.3), (5_000, 0.05), (3 * nat.SPLIT, 0.01)):
+        v = _tricky(rng, n + 1, 0.0, 300.0, share)
+        a_up, a_dn = _tricky(rng, n, 10.0, 5000.0, share), _tricky(rng, n, 10.0, 5000.0, share)
+        between, cap = _tricky(rng, n, -1.0, 20.0, share), _tricky(rng, n, 0.0, 400.0, share)
+        with np.errstate(all="ignore"):
+            want = prof._marks_of(
+                v[:-1], v[1:], a_up, a_dn, prof._denominator(a_up, a_dn), between, cap
+            )
+        out = (
+            np.full(n, -7.0),
+            np.zeros(n, bool),
+            np.zeros(n, bool),
+            np.zeros(n + 1, bool),
+            np.zeros(n + 1, bool),
+        )
+        tols = (TOL.rel_equal, TOL.nil_distance)
+        lib.marks(np.zeros(0, np.intp), True, v, a_up, a_dn, between, cap, tols, out)
+        _same(tuple(want[:3]), out[:3], f"every, n={n}")
+        _same(want[3], out[3][1:], f"through_up n={n}")
+        _same(want[4], out[4][1:], f"through_dn n={n}")
+        # some moves only: the others keep what they had
+        at = np.flatnonzero(rng.random(n) < 0.5)
+        out2 = (np.full(n, -7.0), *(np.zeros(m, bool) for m in (n, n, n + 1, n + 1)))
+        lib.marks(at, False, v, a_up, a_dn, between, cap, tols, out2)
+        rest = np.setdiff1d(np.arange(n), at)
+        _same(out2[0][at], want[0][at], "peak at")
+        assert (out2[0][rest] == -7.0).all()
+        _same(out2[3][at + 1], want[3][at], "through_up at")
+        assert not out2[3][rest + 1].any()
+
+
+def test_marks_refuse_what_does_not_fit():
+    lib = nat.native()
+    assert lib is not None
+    n = 4
+    v, a = np.ones(n + 1), np.ones(n)
+    out = (np.empty(n), *(np.zeros(m, bool) for m in (n, n, n + 1, n + 1)))
+    tols = (TOL.rel_equal, TOL.nil_distance)
+    with pytest.raises(IndexError):
+        lib.marks(np.array([0, n]), False, v, a, a, a, a, tols, out)
+    with pytest.raises(ValueError):
+        lib.marks(np.zeros(0, np.intp), True, v[:-1], a, a, a, a, tols, out)
+    with pytest.raises(TypeError):  # a strided view would be written beside its elements
+        lib.marks(np.zeros(0, np.intp), True, v, a, a, a, np.ones(2 * n)[::2], tols, out)
+
+
+def _rounds(rng: np.random.Generator, n: int, share: float) -> prof._Rounds:
+    length = rng.uniform(0.01, 5.0, n)
+    h = np.where(rng.random(n) < 0.2, rng.uniform(0.0, 1.0, n), 0.0)
+    holds = prof._Holds(length, h, h[::-1].copy(), np.full(n, 0.5), np.full(n, 0.5))
+    acc = rng.choice([800.0, 2000.0, 5000.0], n)
+    jerk = rng.choice([2e4, 5e4, 2e5, np.inf], n)
+    cap = rng.uniform(5.0, 250.0, n)
+    caps = np.concatenate([[0.0], np.minimum(cap[:-1], cap[1:]) * rng.random(n - 1), [0.0]])
+    if share:  # awkward values in the columns the kernels read
+        acc = np.where(rng.random(n) < share, rng.choice([np.inf, 1e-300, 1e300]), acc)
+        jerk = np.where(rng.random(n) < share, rng.choice([0.0, np.nan, 1e-300]), jerk)
+        caps[rng.random(n + 1) < share] = np.inf
+    return prof._Rounds(caps, cap, acc, jerk, holds)
+
+
+def _new_rounds(seed: int, n: int, share: float) -> prof._Rounds:
+    with np.errstate(all="ignore"):  # (the awkward values' terms)
+        return _rounds(np.random.default_rng(seed), n, share)
+
+
+def _run_rounds(rnd: prof._Rounds, rounds: int) -> list:
+    """What each round leaves: the change, the speeds, and every column of the state."""
+    seen = []
+    with np.errstate(all="ignore"):
+        for _ in range(rounds):
+            v = rnd.passes().copy()
+            change = rnd.step(v)
+            state = (
+                v,
+                rnd.a_up.copy(),
+                rnd.a_dn.copy(),
+                rnd.term_up.copy(),
+                rnd.term_dn.copy(),
+                rnd.off_up.copy(),
+                rnd.off_dn.copy(),
+                rnd.step_up.copy(),
+                rnd.step_dn.copy(),
+                tuple(x.copy() for x in rnd.marks or ()),
+                tuple(rnd.behind[d][i].copy() for d in (True, False) for i in (0, 1)),
+            )
+            seen.append((change, rnd.finite, state))
+    return seen
+
+
+@pytest.mark.parametrize(
+    ("n", "share", "seed"),
+    [(200, 0.0, 1), (200, 0.02, 2), (3 * nat.SPLIT, 0.0, 3), (3 * nat.SPLIT, 0.001, 4)],
+)
+def test_rounds_are_numpys(monkeypatch, n, share, seed):
+    """Twelve rounds of the jerk iteration on random moves (a quarter without a jerk limit,
+    holds on a fifth), with and without awkward values: every column of the rounds' state
+    after every round the same bits with the C kernels as with numpy's code -- the dense
+    rounds, the marks of all moves and of the changed ones, the passes; above
+    :data:`SPLIT` moves the two directions and the marks' halves on two threads."""
+    plain, fast = _numpy_then_c(monkeypatch, lambda: _run_rounds(_new_rounds(seed, n, share), 12))
+    for r, (a, b) in enumerate(zip(plain, fast, strict=True)):
+        _same(a, b, f"round {r}")
+
+
+def test_big_rounds_take_two_threads(monkeypatch):
+    """Above SPLIT moves (and on two cores) the dense rounds' directions run side by side;
+    below, one after the other."""
+    if not nat.two_cores():
+        pytest.skip("one core: the rounds run on one thread")
+    calls = []
+    real = prof.side_by_side
+
+    def counted(first, second):
+        calls.append(1)
+        return real(first, second)
+
+    monkeypatch.setattr(prof, "side_by_side", counted)
+    _run_rounds(_new_rounds(7, 3 * nat.SPLIT, 0.0), 3)
+    assert calls
+    calls.clear()
+    _run_rounds(_new_rounds(7, 500, 0.0), 3)
+    assert not calls
+
+
+def test_side_by_side_returns_both_and_raises_either():
+    assert nat.side_by_side(lambda: 1, lambda: "b") == (1, "b")
+
+    def boom() -> int:
+        raise KeyError("first")
+
+    with pytest.raises(KeyError, match="first"):
+        nat.side_by_side(boom, lambda: 2)
+    with pytest.raises(KeyError, match="first"):
+        nat.side_by_side(lambda: 2, boom)
+
+
+def _profiles_same(plain: Profile, fast: Profile) -> None:
+    for f in dataclasses.fields(Profile):
+        if f.name != "evaluation":
+            _same(getattr(plain, f.name), getattr(fast, f.name), f.name)
+
+
+@pytest.mark.parametrize("preset", ["siemens-840d", "linuxcnc-sim"])
+@pytest.mark.parametrize("program", EXAMPLES, ids=lambda p: p.name)
+def test_profiles_of_the_examples_are_numpys(monkeypatch, program, preset):
+    nc = Ncperf()
+    ev = nc.evaluate(nc.extract(str(program)), load_preset(preset))
+    _profiles_same(*_numpy_then_c(monkeypatch, lambda: build_profile(ev)))
+
+
+def test_a_long_raster_profile_is_numpys(monkeypatch, tmp_path):
+    """A finishing raster of 42k moves (above SPLIT: the threads), with the 840D's jerk."""
+    lines = ["G21 G90 G17 G64", "G0 X0 Y0 Z5", "G1 Z0 F3000"]
+    y = 0.0
+    for row in range(420):
+        xs = np.linspace(0.0, 60.0, 101)[1:]
+        if row % 2:
+            xs = xs[::-1] - 0.6
+        lines += [f"X{x:.3f} Y{y + 0.02 * np.sin(x):.4f}" for x in xs]
+        y += 0.3
+        lines.append(f"Y{y:.4f}")
+    path = tmp_path / "raster.ngc"
+    path.write_text("\n".join([*lines, "M30", ""]))
+    nc = Ncperf()
+    ev = nc.evaluate(nc.extract(str(path)), load_preset("siemens-840d"))
+    assert ev.toolpath.n > 2 * nat.SPLIT
+    _profiles_same(*_numpy_then_c(monkeypatch, lambda: build_profile(ev)))
+
+
+def test_stellabee1_profile_is_numpys(monkeypatch):
+    """LinuxCNC's 169k-line test program (../shared), the benchmark of issue 13."""
+    program = shared("data", "gcode", "linuxcnc-tp-tests", "stellabee1.ngc")
+    nc = Ncperf()
+    ev = nc.evaluate(nc.extract(str(program)), load_preset("siemens-840d"))
+    _profiles_same(*_numpy_then_c(monkeypatch, lambda: build_profile(ev)))
+
+
+def test_no_jit_switch_keeps_numpy(monkeypatch):
+    monkeypatch.setenv(NO_JIT_ENV, "1")
+    assert nat.native() is None
+    monkeypatch.setenv(NO_JIT_ENV, "0")
+    assert nat.native() is not None
