@@ -18,6 +18,7 @@ import core.model.native as nat
 from core import Ncperf, load_preset
 from core.engine.profile import Profile, build_profile
 from core.model.jit import NO_JIT_ENV
+from core.model.pieces import SPLIT, side_by_side, two_cores
 from core.model.tolerances import TOL
 from tests.conftest import ROOT, shared
 
@@ -84,7 +85,7 @@ def test_marks_are_numpys_on_awkward_columns():
     rng = np.random.default_rng(13)
     lib = nat.native()
     assert lib is not None
-    for n, share in ((1, 0.5), (17, 0.3), (5_000, 0.05), (3 * nat.SPLIT, 0.01)):
+    for n, share in ((1, 0.5), (17, 0.3), (5_000, 0.05), (3 * SPLIT, 0.01)):
         v = _tricky(rng, n + 1, 0.0, 300.0, share)
         a_up, a_dn = _tricky(rng, n, 10.0, 5000.0, share), _tricky(rng, n, 10.0, 5000.0, share)
         between, cap = _tricky(rng, n, -1.0, 20.0, share), _tricky(rng, n, 0.0, 400.0, share)
@@ -176,7 +177,7 @@ def _run_rounds(rnd: prof._Rounds, rounds: int) -> list:
 
 @pytest.mark.parametrize(
     ("n", "share", "seed"),
-    [(200, 0.0, 1), (200, 0.02, 2), (3 * nat.SPLIT, 0.0, 3), (3 * nat.SPLIT, 0.001, 4)],
+    [(200, 0.0, 1), (200, 0.02, 2), (3 * SPLIT, 0.0, 3), (3 * SPLIT, 0.001, 4)],
 )
 def test_rounds_are_numpys(monkeypatch, n, share, seed):
     """Twelve rounds of the jerk iteration on random moves (a quarter without a jerk limit,
@@ -192,7 +193,7 @@ def test_rounds_are_numpys(monkeypatch, n, share, seed):
 def test_big_rounds_take_two_threads(monkeypatch):
     """Above SPLIT moves (and on two cores) the dense rounds' directions run side by side;
     below, one after the other."""
-    if not nat.two_cores():
+    if not two_cores():
         pytest.skip("one core: the rounds run on one thread")
     calls = []
     real = prof.side_by_side
@@ -202,7 +203,7 @@ def test_big_rounds_take_two_threads(monkeypatch):
         return real(first, second)
 
     monkeypatch.setattr(prof, "side_by_side", counted)
-    _run_rounds(_new_rounds(7, 3 * nat.SPLIT, 0.0), 3)
+    _run_rounds(_new_rounds(7, 3 * SPLIT, 0.0), 3)
     assert calls
     calls.clear()
     _run_rounds(_new_rounds(7, 500, 0.0), 3)
@@ -210,15 +211,15 @@ def test_big_rounds_take_two_threads(monkeypatch):
 
 
 def test_side_by_side_returns_both_and_raises_either():
-    assert nat.side_by_side(lambda: 1, lambda: "b") == (1, "b")
+    assert side_by_side(lambda: 1, lambda: "b") == (1, "b")
 
     def boom() -> int:
         raise KeyError("first")
 
     with pytest.raises(KeyError, match="first"):
-        nat.side_by_side(boom, lambda: 2)
+        side_by_side(boom, lambda: 2)
     with pytest.raises(KeyError, match="first"):
-        nat.side_by_side(lambda: 2, boom)
+        side_by_side(lambda: 2, boom)
 
 
 def _profiles_same(plain: Profile, fast: Profile) -> None:
@@ -250,7 +251,7 @@ def test_a_long_raster_profile_is_numpys(monkeypatch, tmp_path):
     path.write_text("\n".join([*lines, "M30", ""]))
     nc = Ncperf()
     ev = nc.evaluate(nc.extract(str(path)), load_preset("siemens-840d"))
-    assert ev.toolpath.n > 2 * nat.SPLIT
+    assert ev.toolpath.n > 2 * SPLIT
     _profiles_same(*_numpy_then_c(monkeypatch, lambda: build_profile(ev)))
 
 

@@ -59,9 +59,8 @@ from core.engine.lookahead import lazy_caps
 from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
 from core.model.jit import compiled
-from core.model.native import SPLIT, side_by_side, two_cores
 from core.model.native import kernels as round_kernels
-from core.model.pieces import PIECE, pieces, piecewise
+from core.model.pieces import PIECE, SPLIT, pieces, piecewise, side_by_side, two_cores
 from core.model.tolerances import SAMPLE_DT, TOL
 from core.model.toolpath import PathMode, ToolPath
 

@@ -18,26 +18,20 @@ from __future__ import annotations
 
 import ctypes
 import importlib.machinery
-import os
 import sys
-import threading
-from collections.abc import Callable
 from functools import cache
 from pathlib import Path
 from types import ModuleType
-from typing import TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
 
 from core.model.jit import compiled, disabled
+from core.model.pieces import SPLIT, side_by_side, two_cores
 
 #: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
 #: another version of the source is not loaded.
 VERSION = 1
-
-T = TypeVar("T")
-U = TypeVar("U")
 
 _P = ctypes.c_void_p
 _I = ctypes.c_int64
@@ -162,44 +156,6 @@ class Kernels:
         self.lib.plain_passes(
             n1, _ptr(b2, f), _ptr(up, f), _ptr(dn, f), _ptr(w, f), _ptr(bwd, f), _ptr(out, f)
         )
-
-
-#: Moves below which a kernel's work is not split over two threads (starting one costs
-#: about 0.1 ms, the marks of 20k moves about 0.5 ms).
-SPLIT = 20_000
-
-
-@cache
-def two_cores() -> bool:
-    """Whether this process may run on two cores or more."""
-    try:
-        return len(os.sched_getaffinity(0)) >= 2
-    except AttributeError:  # (no sched_getaffinity: macOS, Windows)
-        return (os.cpu_count() or 1) >= 2
-
-
-def side_by_side(first: Callable[[], T], second: Callable[[], U]) -> tuple[T, U]:
-    """``first()`` on a new thread while this one runs ``second()``; both results (an
-    exception of either is raised here, after both ended). For kernels that let go of the
-    GIL (ctypes' calls, numba's nogil kernels) and write disjoint outputs."""
-    box: list = []
-
-    def run() -> None:
-        try:
-            box.append((True, first()))
-        except BaseException as exc:  # (raised again in the caller's thread)
-            box.append((False, exc))
-
-    thread = threading.Thread(target=run, name="ncperf-kernel", daemon=True)
-    thread.start()
-    try:
-        two = second()
-    finally:
-        thread.join()
-    ok, one = box[0]
-    if not ok:
-        raise one
-    return one, two
 
 
 def library_path() -> Path | None:

@@ -22,7 +22,7 @@ from numpy.typing import ArrayLike, NDArray
 from core.model import geometry as g
 from core.model.arrays import unique
 from core.model.errors import Notice
-from core.model.pieces import pieces, piecewise
+from core.model.pieces import halves, pieces, piecewise
 from core.model.sampling import PathSamples
 from core.model.setup import ControllerSetup
 from core.model.tolerances import TOL
@@ -539,7 +539,15 @@ class ToolPath:
         """(n - 1,) direction change beta (rad, [0, pi]) from move j's end to move j+1's start."""
         if self.n < 2:
             return np.zeros(0)
-        return g.angle_between(self.tangent_end[:-1], self.tangent_start[1:])
+        t1, t2 = self.tangent_end[:-1], self.tangent_start[1:]
+        out = np.empty(self.n - 1)
+
+        def rows(s: slice) -> None:  # (each junction's own: the halves side by side)
+            out[s] = g.angle_between(t1[s], t2[s])
+
+        if not halves(self.n - 1, rows):
+            return g.angle_between(t1, t2)
+        return out
 
     @cached_property
     def curvature_jump(self) -> NDArray[np.float64]:
