@@ -300,3 +300,25 @@ def test_one_blas_thread_unless_the_environment_says():
         )
         assert r.returncode == 0, r.stderr
         assert r.stdout.splitlines()[-1] == want
+
+
+def test_the_process_ends_at_once_with_its_output_flushed(program, tmp_path):
+    """`ncperf` ends its process without the interpreter's teardown (core.cli.main:
+    _end_process): the summary and the files are complete, the status is the command's --
+    0, 1 for bad input, 2 for a usage error -- and a pipe read by `head` is no error."""
+    js = tmp_path / "r.json"
+    ok = run("analyze", program, "--json", js)
+    assert ok.returncode == 0, ok.stderr
+    assert ok.stdout.rstrip().endswith(f"json             {js}")
+    assert json.loads(js.read_text())["moves"] > 0
+    bad = tmp_path / "bad.nc"
+    bad.write_text("G1 X1 F100\nG1 X2 Y\n")
+    r = run("analyze", bad)
+    assert r.returncode == 1 and r.stderr.count("\n") == 1 and "bad.nc:2" in r.stderr
+    assert run("analyze", program, "--dt", "1").returncode == 2
+    head = subprocess.run(
+        ["bash", "-c", f'"{sys.executable}" -m core analyze "{program}" | head -c 1; '
+         "exit ${PIPESTATUS[0]}"],
+        capture_output=True, text=True, cwd=ROOT,
+    )  # fmt: skip
+    assert head.returncode == 0 and "Traceback" not in head.stderr, head.stderr

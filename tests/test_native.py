@@ -268,3 +268,48 @@ def test_no_jit_switch_keeps_numpy(monkeypatch):
     assert nat.native() is None
     monkeypatch.setenv(NO_JIT_ENV, "0")
     assert nat.native() is not None
+
+
+def test_halves_on_two_threads_are_one_threads(monkeypatch, tmp_path):
+    """The corner model's shares and feeds of 50k random corners and the turn angles of a
+    50k-move random polyline (above SPLIT: two halves on two threads,
+    core.model.pieces.halves) are those of one thread, bit for bit; and the threads did
+    run."""
+    import core.model.pieces as pieces_module
+    from plugins import tangential
+
+    if not two_cores():
+        pytest.skip("one core: nothing runs side by side")
+    rng = np.random.default_rng(11)
+    m = 50_000
+    t1 = rng.standard_normal((m, 3))
+    t1 /= np.linalg.norm(t1, axis=1)[:, None]
+    t2 = rng.standard_normal((m, 3))
+    t2[::7] = t1[::7]  # (straight on: no turn)
+    t2[::11] = -t1[::11]  # (reversal)
+    t2 /= np.linalg.norm(t2, axis=1)[:, None]
+    radius = rng.uniform(0.0, 2.0, m)
+    radius[::13] = 0.0
+    machine = load_preset("siemens-840d")
+    points = np.cumsum(rng.uniform(-1.0, 1.0, (m, 3)), axis=0)
+    path = tmp_path / "polyline.ngc"
+    body = "\n".join(f"G1 X{x:.4f} Y{y:.4f} Z{z:.4f}" for x, y, z in points)
+    path.write_text(f"G21 G90 G64 F3000\n{body}\nM30\n")
+    tp = Ncperf().extract(str(path))
+    assert tp.n > 2 * SPLIT
+
+    def run() -> tuple:
+        tp.__dict__.pop("turn_angle", None)  # (a cached property: made again)
+        shares = tangential.corner_shares(t1, t2)
+        return (*shares, *tangential._corner_feed(shares, radius, machine), tp.turn_angle)
+
+    calls = []
+    real = pieces_module.side_by_side
+    monkeypatch.setattr(pieces_module, "side_by_side", lambda a, b: calls.append(1) or real(a, b))
+    two = run()
+    assert len(calls) == 3
+    monkeypatch.setattr(pieces_module, "two_cores", lambda: False)
+    calls.clear()
+    one = run()
+    assert not calls
+    _same(one, two)

@@ -7,6 +7,7 @@ Exit status: 0 success, 1 bad input (one line ``FILE:LINE: what is wrong``),
 from __future__ import annotations
 
 import argparse
+import contextlib
 import dataclasses
 import io
 import math
@@ -734,13 +735,40 @@ class _Printable(io.TextIOBase):
 
 
 def main(argv: list[str] | None = None) -> int:
+    """The ``ncperf`` command: ``argv`` (the process's arguments if None: then the process
+    ends here, see :func:`_end_process`); returns the exit status."""
     # (numpy's BLAS threads: set in core/cli/__init__.py, before anything loads numpy)
     out, err = sys.stdout, sys.stderr
     sys.stdout, sys.stderr = _Printable(out), _Printable(err)
     try:
-        return _main(argv)
+        rc = _main(argv)
     finally:
         sys.stdout, sys.stderr = out, err
+    if argv is None:  # the program itself (the console script, python -m core)
+        _end_process(rc)
+    return rc
+
+
+def _end_process(rc: int) -> None:
+    """End the process with status ``rc`` once its output is flushed, without the
+    interpreter's teardown -- freeing every module and array one by one, which nothing
+    needs once the outputs are written and closed (they are: atomic_writer renames each
+    file into place before the command returns): stellabee1's analyze 0.05 s of 0.8
+    (2026-11-28). The normal way where something still has to run at exit: worker
+    processes alive, or a profiler or tracer that writes its report then."""
+    mp = sys.modules.get("multiprocessing")
+    if (mp is not None and mp.active_children()) or sys.getprofile() or sys.gettrace():
+        sys.exit(rc)
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except BrokenPipeError:  # (read by a pipe that closed early: not an error of ours)
+            pass
+        except OSError as exc:  # (a full disk under a redirection, say)
+            with contextlib.suppress(OSError):
+                os.write(2, f"ncperf: cannot write the output: {exc}\n".encode())
+            rc = rc or 1
+    os._exit(rc)
 
 
 def _main(argv: list[str] | None) -> int:
