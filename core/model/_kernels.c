@@ -44,7 +44,7 @@ static inline double vmin(double a, double b) {
 
 /* The version of this interface: core/model/native.py loads a library of its own
    version only (a stale build beside newer Python code is not used). */
-EXPORT int64_t ncperf_kernels_version(void) { return 1; }
+EXPORT int64_t ncperf_kernels_version(void) { return 2; }
 
 /* core.engine.profile._Rounds._all_marks (every != 0: the moves first..first+count-1) or
    _marks_of of the moves at[first..first+count-1] (two threads take a half each): each move's peak, whether it accelerates (rise) or brakes
@@ -211,6 +211,45 @@ EXPORT void plain_passes(int64_t n1, const double *b2, const double *up, const d
         /* (an overflowed sum gives NaN here: np.minimum's rules) */
         out[i] = sqrt(vmin(vmin(out[i], least - wd2), b2[i]));
     }
+}
+
+/* plain_passes in three parts, the first two side by side on two threads: the forward
+   sums and pass into out (passes_forward), the backward sums and pass into bwd
+   (passes_backward: bwd[i] = the backward running minimum less the braking sum, the
+   number plain_passes takes the minimum with), then out = sqrt(min(out, bwd, b2))
+   (passes_join). The same operations on the same numbers as plain_passes. */
+EXPORT void passes_forward(int64_t n1, const double *b2, const double *up, double *w,
+                           double *out) {
+    double wu = 0.0;
+    double least = b2[0];
+    for (int64_t i = 0; i < n1; i++) {
+        if (i) wu = i == 1 ? up[0] : wu + up[i - 1];
+        w[i] = wu;
+        double x = b2[i] - wu;
+        if (x < least) least = x;
+        out[i] = least + wu;
+    }
+}
+
+EXPORT void passes_backward(int64_t n1, const double *b2, const double *dn, double *bwd) {
+    double wd = 0.0;
+    for (int64_t i = 0; i < n1; i++) {
+        if (i) wd = i == 1 ? dn[0] : wd + dn[i - 1];
+        bwd[i] = wd;
+    }
+    double least = b2[n1 - 1] + bwd[n1 - 1];
+    for (int64_t i = n1 - 1; i >= 0; i--) {
+        double wd2 = bwd[i];
+        double x = b2[i] + wd2;
+        if (x < least) least = x;
+        bwd[i] = least - wd2;
+    }
+}
+
+EXPORT void passes_join(int64_t first, int64_t count, const double *b2, const double *bwd,
+                        double *out) {
+    for (int64_t i = first; i < first + count; i++)
+        out[i] = sqrt(vmin(vmin(out[i], bwd[i]), b2[i]));
 }
 
 /* Windows' linker wants the entry point of a Python extension, which setuptools builds

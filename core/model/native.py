@@ -31,7 +31,7 @@ from core.model.pieces import SPLIT, side_by_side, two_cores
 
 #: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
 #: another version of the source is not loaded.
-VERSION = 1
+VERSION = 2
 
 _P = ctypes.c_void_p
 _I = ctypes.c_int64
@@ -57,6 +57,12 @@ class Kernels:
         lib.dense_round.restype = _I
         lib.plain_passes.argtypes = [_I, *[_P] * 6]
         lib.plain_passes.restype = None
+        lib.passes_forward.argtypes = [_I, *[_P] * 4]
+        lib.passes_forward.restype = None
+        lib.passes_backward.argtypes = [_I, *[_P] * 3]
+        lib.passes_backward.restype = None
+        lib.passes_join.argtypes = [_I, _I, *[_P] * 3]
+        lib.passes_join.restype = None
 
     def marks(
         self,
@@ -153,8 +159,20 @@ class Kernels:
         n1 = b2.size
         if n1 == 0 or not (up.size == dn.size == n1 - 1 and w.size == bwd.size == out.size == n1):
             raise ValueError("C kernel plain_passes: columns of different lengths")
-        self.lib.plain_passes(
-            n1, _ptr(b2, f), _ptr(up, f), _ptr(dn, f), _ptr(w, f), _ptr(bwd, f), _ptr(out, f)
+        p_b2, p_up, p_dn = _ptr(b2, f), _ptr(up, f), _ptr(dn, f)
+        p_w, p_bwd, p_out = _ptr(w, f), _ptr(bwd, f), _ptr(out, f)
+        if n1 < SPLIT or not two_cores():
+            self.lib.plain_passes(n1, p_b2, p_up, p_dn, p_w, p_bwd, p_out)
+            return
+        # the forward and the backward pass side by side, then their minimum (in halves)
+        side_by_side(
+            lambda: self.lib.passes_forward(n1, p_b2, p_up, p_w, p_out),
+            lambda: self.lib.passes_backward(n1, p_b2, p_dn, p_bwd),
+        )
+        h = n1 // 2
+        side_by_side(
+            lambda: self.lib.passes_join(0, h, p_b2, p_bwd, p_out),
+            lambda: self.lib.passes_join(h, n1 - h, p_b2, p_bwd, p_out),
         )
 
 
