@@ -17,10 +17,12 @@ changes from day to day):
    microseconds and bytes per move (linear growth keeps both columns flat).
 3. Start-up: ``ncperf --help`` and ``ncperf machines`` beside ``python -c pass``.
 
-Every ncperf run is a fresh ``python -m core`` process: wall time around it, peak memory the
-child's maximum resident set size (os.wait4). ncperf's bytecode is written first (as ``pip
-install .`` does), so no run pays for compiling its modules. A last table splits one
-in-process run of the 1M raster into its stages.
+Every ncperf run is a fresh ``python -m core`` process, started in the temporary folder (the
+installed ncperf, not the source tree a non-editable install would leave without its C
+kernels): wall time around it, peak memory the child's maximum resident set size
+(os.wait4). ncperf's bytecode is written first (as ``pip install .`` does), so no run pays
+for compiling its modules. The header says whether the C kernels (core/model/native.py)
+load. A last table splits one in-process run of the 1M raster into its stages.
 
 Bars (issue 13, on this machine, as ratios in one run): stellabee1 at most 0.8 x rs274;
 1M moves with --svg under 2.5 s and 500 MB; 5M under 2 GB, time linear; --help and
@@ -52,7 +54,11 @@ def run(cmd: list[str]) -> tuple[float, float]:
     """Wall time (s) and peak RSS (MB) of one process; its output is thrown away."""
     t0 = time.perf_counter()
     proc = subprocess.Popen(
-        cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
+        cmd,
+        stdin=subprocess.DEVNULL,
+        stdout=subprocess.DEVNULL,
+        stderr=subprocess.DEVNULL,
+        cwd=tempfile.gettempdir(),  # the installed ncperf, not the source tree beside it
     )
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t0
@@ -206,6 +212,13 @@ def main() -> None:
         f"{platform.processor() or platform.machine()}, Python {platform.python_version()}, "
         f"{os.cpu_count()} cores"
     )
+    print()
+    kernels = subprocess.run(
+        [sys.executable, "-c", "from core.model.native import library_path, native\n"
+         "print(library_path() if native() else 'not built: numpy code')"],
+        capture_output=True, text=True, cwd=tempfile.gettempdir(), check=True,
+    ).stdout.strip()  # fmt: skip
+    print(f"C kernels (core/model/native.py): {kernels}")
     print()
     compile_bytecode()
     with tempfile.TemporaryDirectory() as tmp_name:

@@ -42,7 +42,7 @@ EX=$("$WORK/venv/bin/python" -c "import importlib.resources as r; print(r.files(
 run() { echo "check_wheel: ncperf $*"; "$NC" "$@" >"$WORK/out.txt" 2>"$WORK/err.txt" || {
     cat "$WORK/out.txt" "$WORK/err.txt"; echo "check_wheel: FAILED: ncperf $*"; exit 1; }; }
 if command -v cc >/dev/null || command -v gcc >/dev/null; then
-    "$WORK/venv/bin/python" -c "from core.model.native import native; assert native()" ||
+    "$WORK/venv/bin/python" -c "from core.model.native import native; from adapters.gcode.lexer import _words_library as w; assert native() and w()" ||
         { echo "check_wheel: the wheel's C kernels do not load"; exit 1; }
     echo "check_wheel: the C kernels load"
 fi

@@ -15,19 +15,22 @@ import pytest
 
 import core.engine.profile as prof
 import core.model.native as nat
+from adapters.gcode.lexer import _words_library
 from core import Ncperf, load_preset
 from core.engine.profile import Profile, build_profile
-from core.model.jit import NO_JIT_ENV
+from core.model.jit import NO_JIT_ENV, disabled
 from core.model.pieces import SPLIT, side_by_side, two_cores
 from core.model.tolerances import TOL
 from tests.conftest import ROOT, shared
 
-if nat.native() is None:
+if nat.native() is None or _words_library() is None:
     if os.environ.get("NCPERF_REQUIRE_NATIVE"):
-        raise RuntimeError(f"the C kernels were not built or do not load ({nat.library_path()})")
-    pytest.skip("the C kernels were not built (no C compiler at install)", allow_module_level=True)
+        raise RuntimeError("the C kernels were not built or do not load (NCPERF_REQUIRE_NATIVE)")
+    why = "NCPERF_NO_JIT is set" if disabled() else "not built (no C compiler at install)"
+    pytest.skip(f"the C kernels: {why}", allow_module_level=True)
 
 EXAMPLES = sorted((ROOT / "examples").glob("*.ngc"))
+PROGRAMS = sorted((ROOT / "tests" / "programs").glob("*"))
 
 
 @pytest.fixture(autouse=True)
@@ -313,3 +316,81 @@ def test_halves_on_two_threads_are_one_threads(monkeypatch, tmp_path):
     one = run()
     assert not calls
     _same(one, two)
+
+
+def _plain_texts(rng: np.random.Generator) -> list[bytes]:
+    """Plain texts as the lexer's scanner sees them (upper-case letters, 0-9 . + -, one
+    newline per line): well-formed and broken numbers of every length up to 20 bytes and
+    past MAX_DIGITS digits, signed zeros, empty words, numbers before a line's first
+    letter, empty lines, a text shorter than eight bytes."""
+    spans = [b"", b"0", b"-0", b"+0", b"-0.0", b".5", b"-.5", b"5.", b"1.2.3", b"+-1", b"1-",
+             b"-", b".", b"+.", b"123456789012345", b"1234567890123456", b"-0.000000000000001",
+             b"99999999999999999999", b"12345678.12345678", b"0000000000000000001", b"3.14159",
+             b"-123.456", b"1e5"[:1], b"007", b"2.50000000000000000"]  # fmt: skip
+    texts = [b"G1\n", b"X1\n", b"1X1\n", b"\n\n", b"G1X.5Y-.5\nM30\n"]
+    for _ in range(60):
+        lines = []
+        for _ in range(int(rng.integers(1, 40))):
+            words = []
+            if rng.random() < 0.05:
+                words.append(spans[int(rng.integers(len(spans)))] or b"7")
+            for _ in range(int(rng.integers(0, 6))):
+                letter = bytes([int(rng.integers(ord("A"), ord("Z") + 1))])
+                if rng.random() < 0.7:
+                    digits = rng.integers(0, 10, int(rng.integers(1, 18))).astype(np.uint8) + 48
+                    body = bytes(digits)
+                    if rng.random() < 0.6:
+                        k = int(rng.integers(0, len(body) + 1))
+                        body = body[:k] + b"." + body[k:]
+                    if rng.random() < 0.4:
+                        body = b"-" + body
+                else:
+                    body = spans[int(rng.integers(len(spans)))]
+                words.append(letter + body)
+            lines.append(b"".join(words))
+        texts.append(b"\n".join(lines) + b"\n")
+    return texts
+
+
+def test_gcode_scanner_is_numpys():
+    """The lexer's plain path in C (adapters/gcode/_words.c) against its numpy code: the
+    same words, lines, numbers (bits: signed zeros, the correctly rounded decimal) and bad
+    lines, on random plain texts and on every line of the examples."""
+    from adapters.gcode import lexer
+    from adapters.gcode.lexer import _plain_text
+    from adapters.source import Source
+
+    lib = lexer._words_library()
+    assert lib is not None, "the G-code scanner was not built"
+    texts = _plain_texts(np.random.default_rng(21))
+    for program in [*EXAMPLES, *PROGRAMS]:
+        src = Source(str(program), program.read_bytes())
+        texts.append(_plain_text(src, np.zeros(src.n_lines, dtype=bool)))
+    for text in texts:
+        c = np.frombuffer(text, dtype=np.uint8)
+        _same(lexer._words_in_numpy(text, c)[:5], lexer._words_in_c(lib, text)[:5], repr(text))
+        assert lexer._words_in_numpy(text, c)[5] == lexer._words_in_c(lib, text)[5], text
+
+
+def test_tokens_of_real_programs_are_numpys(monkeypatch):
+    """Whole programs through the lexer (numpy's code, then the C scanner): the same
+    Words -- the examples, the tests' programs (cycles, subprograms, comments) and
+    stellabee1 (169k lines, ../shared)."""
+    from adapters.source import Source
+
+    stellabee1 = shared("data", "gcode", "linuxcnc-tp-tests", "stellabee1.ngc")
+    for program in [*EXAMPLES, *PROGRAMS, stellabee1]:
+        src = Source(str(program), program.read_bytes())
+        plain, fast = _numpy_then_c(monkeypatch, lambda: _tokens(src))  # noqa: B023
+        _same(plain, fast, program.name)
+
+
+def _tokens(src: object) -> object:
+    """The lexer's Words, or its error's text (a program in another dialect)."""
+    from adapters.gcode.lexer import tokenize
+    from core.model.errors import InputError
+
+    try:
+        return tokenize(src)  # type: ignore[arg-type]
+    except InputError as exc:
+        return str(exc)

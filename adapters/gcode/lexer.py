@@ -11,9 +11,11 @@ its errors. Both produce the same columns.
 
 from __future__ import annotations
 
+import ctypes
 import re
 import warnings
 from dataclasses import dataclass, field
+from pathlib import Path
 
 import numpy as np
 from numpy.typing import NDArray
@@ -22,6 +24,8 @@ from adapters.gcode import words as W
 from adapters.gcode.numbers import read_numbers
 from adapters.source import Source, check_bytes
 from core.model.arrays import isin, unique
+from core.model.jit import disabled
+from core.model.native import load_library
 
 SPACE, TAB, CR, LF, VT, FF = 32, 9, 13, 10, 11, 12
 
@@ -142,6 +146,38 @@ def tokenize(src: Source) -> Words:
     special = np.zeros(src.n_lines, dtype=bool)
     text = _plain_text(src, special)
     c = np.frombuffer(text, dtype=np.uint8)
+    lib = _words_library()
+    if lib is not None:
+        line, letter, value, at, e, bad = _words_in_c(lib, text)
+    else:
+        line, letter, value, at, e, bad = _words_in_numpy(text, c)
+    if bad:
+        special[np.array(sorted(bad), dtype=np.int64)] = True
+    bare = _bare_integers(c, at, e, letter, value)
+
+    result = Words(line=line, letter=letter, value=value, bare=bare, n_lines=src.n_lines)
+    sp = np.flatnonzero(special)
+    result.special_lines = int(sp.size)
+    rows = [r for i in sp for r in tokenize_line(src, int(i), result)]
+    if rows:
+        line = np.concatenate([line, np.array([r[0] for r in rows], dtype=np.int64)])
+        letter = np.concatenate([letter, np.array([r[1] for r in rows], dtype=np.uint8)])
+        value = np.concatenate([value, np.array([r[2] for r in rows], dtype=np.float64)])
+        bare = np.concatenate([bare, np.array([r[3] for r in rows], dtype=bool)])
+        order = np.argsort(line, kind="stable")
+        result.line, result.letter = line[order], letter[order]
+        result.value, result.bare = value[order], bare[order]
+    return result
+
+
+Found = tuple[NDArray, NDArray, NDArray, NDArray, NDArray, set[int]]
+
+
+def _words_in_numpy(text: bytes, c: NDArray[np.uint8]) -> Found:
+    """The words of the plain text (:func:`_plain_text`) on its good lines -- their lines,
+    letters, numbers, places and numbers' ends -- and the bad lines (a word without a
+    number or with one not well formed, number bytes before a line's first letter), which
+    the per-line tokeniser reads: on numpy's arrays (see :func:`_words_in_c`)."""
 
     brk_mask = np.frombuffer(text.translate(_BREAK), dtype=bool)
     brk = np.flatnonzero(brk_mask)
@@ -217,28 +253,54 @@ def tokenize(src: Source) -> Words:
     del numbers, lfpos
     if values is None:  # no word to read
         values = np.full(lpos.size, np.nan)
-    if bad:
-        special[np.array(sorted(bad), dtype=np.int64)] = True
     if want.all():
-        line, letter, value, at, e = wline, c[lpos], values, lpos, span_end
-    else:
-        line, letter, value = wline[want], c[lpos[want]], values[want]
-        at, e = lpos[want], span_end[want]
-    bare = _bare_integers(c, at, e, letter, value)
+        return wline, c[lpos], values, lpos, span_end, bad
+    return wline[want], c[lpos[want]], values[want], lpos[want], span_end[want], bad
 
-    result = Words(line=line, letter=letter, value=value, bare=bare, n_lines=src.n_lines)
-    sp = np.flatnonzero(special)
-    result.special_lines = int(sp.size)
-    rows = [r for i in sp for r in tokenize_line(src, int(i), result)]
-    if rows:
-        line = np.concatenate([line, np.array([r[0] for r in rows], dtype=np.int64)])
-        letter = np.concatenate([letter, np.array([r[1] for r in rows], dtype=np.uint8)])
-        value = np.concatenate([value, np.array([r[2] for r in rows], dtype=np.float64)])
-        bare = np.concatenate([bare, np.array([r[3] for r in rows], dtype=bool)])
-        order = np.argsort(line, kind="stable")
-        result.line, result.letter = line[order], letter[order]
-        result.value, result.bare = value[order], bare[order]
-    return result
+
+def _words_library() -> ctypes.CDLL | None:
+    """The C scanner of the plain text (adapters/gcode/_words.c), or None: not built, not
+    loadable, or ``NCPERF_NO_JIT`` set (numpy's code then)."""
+    if disabled():
+        return None
+    lib = load_library(Path(__file__).parent, "_words", "ncperf_words_version", 1)
+    if lib is not None and lib.gcode_words.argtypes is None:
+        lib.gcode_letters.argtypes = [ctypes.c_char_p, ctypes.c_int64]
+        lib.gcode_letters.restype = ctypes.c_int64
+        lib.gcode_words.argtypes = [ctypes.c_char_p, ctypes.c_int64, *[ctypes.c_void_p] * 7]
+        lib.gcode_words.restype = ctypes.c_int64
+    return lib
+
+
+#: gcode_words' kinds of words (_words.c).
+_READ, _LONG = 0, 3
+
+
+def _words_in_c(lib: ctypes.CDLL, text: bytes) -> Found:
+    """:func:`_words_in_numpy` in one pass of C over the text (the same arrays, bit for
+    bit: tests/test_native.py); numbers of more digits than the C reads (MAX_DIGITS) by
+    Python's float, as there."""
+    size = len(text)
+    count = lib.gcode_letters(text, size)
+    wline = np.empty(count, dtype=np.int64)
+    letter = np.empty(count, dtype=np.uint8)
+    at = np.empty(count, dtype=np.int64)
+    end = np.empty(count, dtype=np.int64)
+    value = np.empty(count)
+    kind = np.empty(count, dtype=np.uint8)
+    bad_line = np.zeros(text.count(b"\n") + 1, dtype=bool)
+    got = lib.gcode_words(
+        text, size, *(a.ctypes.data for a in (wline, letter, at, end, value, kind, bad_line))
+    )
+    if got != count:  # pragma: no cover - a letter is a word
+        raise AssertionError("G-code lexer: the C scanner's words are not the letters")
+    for i in np.flatnonzero(kind == _LONG).tolist():  # (well formed: the C checked)
+        value[i] = float(text[int(at[i]) + 1 : int(end[i])])
+    bad = set(np.flatnonzero(bad_line).tolist())
+    if not bad:
+        return wline, letter, value, at, end, bad
+    want = ~bad_line[wline]
+    return wline[want], letter[want], value[want], at[want], end[want], bad
 
 
 def _line_ranges(

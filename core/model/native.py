@@ -176,32 +176,43 @@ class Kernels:
         )
 
 
-def library_path() -> Path | None:
-    """Where the built library is (beside this file, named as a Python extension), or
-    None."""
-    here = Path(__file__).parent
+def library_path(folder: Path | None = None, name: str = "_kernels") -> Path | None:
+    """Where a built library is (in ``folder``, by default this file's, named as a Python
+    extension ``name``), or None."""
+    here = Path(__file__).parent if folder is None else folder
     for suffix in importlib.machinery.EXTENSION_SUFFIXES:
-        path = here / f"_kernels{suffix}"
+        path = here / f"{name}{suffix}"
         if path.is_file():
             return path
     return None
 
 
 @cache
-def _load() -> Kernels | None:
-    if sys.maxsize != 2**63 - 1:  # (int64_t is intp on 64-bit platforms only)
+def load_library(folder: Path, name: str, version_symbol: str, version: int) -> ctypes.CDLL | None:
+    """The C library ``name`` built beside the modules in ``folder`` (an optional
+    extension of pyproject.toml), loaded with ctypes where its ``version_symbol()``
+    returns ``version``; None where it is absent, does not load here, or is another
+    version (a stale build beside newer Python code). 64-bit platforms only (the kernels'
+    int64_t is numpy's intp there)."""
+    if sys.maxsize != 2**63 - 1:
         return None
-    path = library_path()
+    path = library_path(folder, name)
     if path is None:
         return None
     try:
         lib = ctypes.CDLL(str(path))
-        lib.ncperf_kernels_version.restype = ctypes.c_int64
-        if lib.ncperf_kernels_version() != VERSION:
-            return None
-        return Kernels(lib)
+        check = getattr(lib, version_symbol)
+        check.restype = ctypes.c_int64
+        check.argtypes = []
+        return lib if check() == version else None
     except (OSError, AttributeError):  # not loadable here, or not this library
         return None
+
+
+@cache
+def _load() -> Kernels | None:
+    lib = load_library(Path(__file__).parent, "_kernels", "ncperf_kernels_version", VERSION)
+    return None if lib is None else Kernels(lib)
 
 
 def native() -> Kernels | None:
