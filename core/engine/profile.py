@@ -59,6 +59,7 @@ from core.engine.lookahead import lazy_caps
 from core.model.arrays import isin, nan_to_num, put_where, select
 from core.model.heap import release_free_heap
 from core.model.jit import compiled
+from core.model.native import Kernels
 from core.model.native import kernels as round_kernels
 from core.model.pieces import PIECE, SPLIT, pieces, piecewise, side_by_side, two_cores
 from core.model.tolerances import SAMPLE_DT, TOL
@@ -1174,6 +1175,10 @@ class _Rounds:
         # per direction (True: accelerating): the moves whose acceleration the damping kept
         # off their target, and their targets
         self.behind = {d: (np.zeros(0, dtype=np.intp), np.zeros(0)) for d in (True, False)}
+        # acc / jerk and acc * acc / jerk, which the C kernels' dense rounds take instead of
+        # dividing again in every round (the quotients effective_acceleration makes; made
+        # where those kernels run: :meth:`_fix`)
+        self.fixed: tuple[NDArray, NDArray] | None = None
 
     def passes(self) -> NDArray:
         """:func:`_passes` at the current accelerations (the squared caps and the passes'
@@ -1195,6 +1200,7 @@ class _Rounds:
         are made again only where one of those changed (a few moves in a thousand once the
         speeds settle), the same arithmetic on the same numbers."""
         near = None
+        self._fix()
         if self.marks is None:
             self.marks = self._all_marks(v)
         else:
@@ -1503,9 +1509,10 @@ class _Rounds:
         if kernels is not None:  # the same operations move by move (core.model.native)
             step = np.empty(n, dtype=np.int8)
             moved = np.empty(n, dtype=bool)
+            extra = {"fixed": self.fixed} if isinstance(kernels, Kernels) else {}
             change, finite, at, want = kernels.dense_round(
                 rising, phase, through, v0, v1, peak, a, last, term, off, acc, jerk,
-                between, step, moved, CACHE_PIECE, TOL.nil_speed, finite,
+                between, step, moved, CACHE_PIECE, TOL.nil_speed, finite, **extra,
             )  # fmt: skip
             self._keep_round(rising, step, moved, (at, want))
             return float(change), bool(finite)
@@ -1561,6 +1568,15 @@ class _Rounds:
         )
         self._keep_round(rising, step, moved, behind)
         return change, finite
+
+    def _fix(self) -> None:
+        """:attr:`fixed` made where the C kernels run the rounds (in the caller's thread,
+        before the directions go side by side)."""
+        if self.fixed is None and isinstance(round_kernels(), Kernels):
+            with np.errstate(divide="ignore", invalid="ignore"):
+                lim = self.acc * self.acc
+                lim /= self.jerk
+                self.fixed = (self.acc / self.jerk, lim)
 
     def _keep_round(
         self, rising: bool, step: NDArray, moved: NDArray | slice, behind: tuple[NDArray, NDArray]

@@ -44,7 +44,7 @@ static inline double vmin(double a, double b) {
 
 /* The version of this interface: core/model/native.py loads a library of its own
    version only (a stale build beside newer Python code is not used). */
-EXPORT int64_t ncperf_kernels_version(void) { return 2; }
+EXPORT int64_t ncperf_kernels_version(void) { return 3; }
 
 /* core.engine.profile._Rounds._all_marks (every != 0: the moves first..first+count-1) or
    _marks_of of the moves at[first..first+count-1] (two threads take a half each): each move's peak, whether it accelerates (rise) or brakes
@@ -122,14 +122,16 @@ static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t 
    largest relative change into *change, whether the terms are still plain into *finite;
    the moves the damping held back into behind, their targets into wanted (n each at
    most): returns how many. Pieces of `piece` moves as there: a piece where no
-   acceleration moves keeps its off and term untouched. work: 3 n doubles, cont: n + 1. */
+   acceleration moves keeps its off and term untouched. work: 3 n doubles, cont: n + 1;
+   aj and lim (or NULL): acc / jerk and acc * acc / jerk, which do not change from round to
+   round (the same quotients, made once by numpy). */
 EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const uint8_t *through,
                            const double *v0, const double *v1, const double *peak, double *a,
                            const int8_t *last, double *term, uint8_t *off, const double *acc,
                            const double *jerk, const double *between, int8_t *step,
                            uint8_t *moved, int64_t piece, double nil_speed, int *finite,
                            double *change, int64_t *behind, double *wanted, double *work,
-                           uint8_t *cont) {
+                           uint8_t *cont, const double *aj, const double *lim) {
     double *upper = work, *dv = work + n, *out = work + 2 * n;
     chain_dv(rising, n, phase, through, v0, v1, peak, cont, upper, dv);
     int64_t n_behind = 0;
@@ -144,9 +146,9 @@ EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const ui
             double d = dv[k], ak = acc[k], jk = jerk[k];
             double nw = ak;
             if (isfinite(jk) && d > nil_speed && phase[k]) {
-                double t_full = d / ak + ak / jk;
+                double t_full = d / ak + (aj ? aj[k] : ak / jk);
                 double t_short = sqrt(d / jk) * 2.0;
-                double t = d >= ak * ak / jk ? t_full : t_short;
+                double t = d >= (lim ? lim[k] : ak * ak / jk) ? t_full : t_short;
                 nw = d / t;
             }
             /* the damping: the geometric mean where the step turns back */

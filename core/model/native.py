@@ -31,7 +31,7 @@ from core.model.pieces import SPLIT, side_by_side, two_cores
 
 #: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
 #: another version of the source is not loaded.
-VERSION = 2
+VERSION = 3
 
 _P = ctypes.c_void_p
 _I = ctypes.c_int64
@@ -53,7 +53,7 @@ class Kernels:
         self.lib = lib
         lib.marks.argtypes = [_P, _I, _I, ctypes.c_int, *[_P] * 5, _D, _D, *[_P] * 5]
         lib.marks.restype = None
-        lib.dense_round.argtypes = [ctypes.c_int, _I, *[_P] * 14, _I, _D, *[_P] * 6]
+        lib.dense_round.argtypes = [ctypes.c_int, _I, *[_P] * 14, _I, _D, *[_P] * 8]
         lib.dense_round.restype = _I
         lib.plain_passes.argtypes = [_I, *[_P] * 6]
         lib.plain_passes.restype = None
@@ -125,14 +125,17 @@ class Kernels:
         piece: int,
         nil_speed: float,
         finite: bool,
+        fixed: tuple[NDArray, NDArray] | None = None,
     ) -> tuple[float, bool, NDArray, NDArray]:
         """core.engine.profile._Rounds._dense: as :func:`core.model.compiled.dense_round`
         (``a``, ``off``, ``term`` in place, ``step`` and ``moved`` written; the largest
         relative change, whether the terms are still plain, the moves the damping held
-        back and their targets)."""
+        back and their targets). ``fixed``: ``acc / jerk`` and ``acc * acc / jerk`` made
+        once for all the rounds (else the kernel divides again)."""
         f, b = np.float64, np.bool_
         n = a.size
-        cols = (phase, v0, v1, peak, last, term, off, acc, jerk, between, step, moved)
+        cols = [phase, v0, v1, peak, last, term, off, acc, jerk, between, step, moved]
+        cols += [] if fixed is None else list(fixed)
         if through.size != n + 1 or any(c.size != n for c in cols) or piece < 1:
             raise ValueError("C kernel dense_round: columns of different lengths")
         behind = np.empty(n, dtype=np.intp)
@@ -148,6 +151,7 @@ class Kernels:
             _ptr(step, np.int8), _ptr(moved, b), piece, nil_speed,
             ctypes.addressof(fin), ctypes.addressof(change),
             _ptr(behind, np.intp), _ptr(wanted, f), _ptr(work, f), _ptr(cont, b),
+            *((None, None) if fixed is None else (_ptr(fixed[0], f), _ptr(fixed[1], f))),
         )  # fmt: skip
         return change.value, bool(fin.value), behind[:count].copy(), wanted[:count].copy()
 
