@@ -44,7 +44,7 @@ static inline double vmin(double a, double b) {
 
 /* The version of this interface: core/model/native.py loads a library of its own
    version only (a stale build beside newer Python code is not used). */
-EXPORT int64_t ncperf_kernels_version(void) { return 3; }
+EXPORT int64_t ncperf_kernels_version(void) { return 4; }
 
 /* core.engine.profile._Rounds._all_marks (every != 0: the moves first..first+count-1) or
    _marks_of of the moves at[first..first+count-1] (two threads take a half each): each move's peak, whether it accelerates (rise) or brakes
@@ -83,10 +83,17 @@ EXPORT void marks(const int64_t *at, int64_t first, int64_t count, int every, co
     }
 }
 
-/* core.engine.profile._chain_dv into dv, with the work arrays cont (n + 1) and upper (n). */
+/* The speed at the ramp's upper end of move k (rising: its end, falling: its start): the
+   next (previous) move's boundary speed where it ramps through, else its peak. */
+static inline double upper_of(int rising, int64_t k, const uint8_t *through, const double *v0,
+                              const double *v1, const double *peak) {
+    return through[k + 1] ? (rising ? v1[k] : v0[k]) : peak[k];
+}
+
+/* core.engine.profile._chain_dv into dv, with the work array cont (n + 1). */
 static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t *through,
                      const double *v0, const double *v1, const double *peak, uint8_t *cont,
-                     double *upper, double *dv) {
+                     double *dv) {
     cont[0] = 0;
     cont[n] = 0;
     for (int64_t k = 0; k < n; k++) {
@@ -95,13 +102,8 @@ static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t 
         else if (k > 0)
             cont[k] = through[k + 1] && phase[k] && phase[k - 1];
     }
-    for (int64_t k = 0; k < n; k++) {
-        if (through[k + 1])
-            upper[k] = rising ? v1[k] : v0[k];
-        else
-            upper[k] = peak[k];
-        dv[k] = upper[k] - (rising ? v0[k] : v1[k]);
-    }
+    for (int64_t k = 0; k < n; k++)
+        dv[k] = upper_of(rising, k, through, v0, v1, peak) - (rising ? v0[k] : v1[k]);
     int64_t k = 0;
     while (k < n) {
         if (!(cont[k] || cont[k + 1])) {
@@ -111,7 +113,8 @@ static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t 
         int64_t first = k; /* a chain of several moves: to the first without cont[k + 1] */
         while (cont[k + 1]) k++;
         int64_t last = k;
-        double hi = rising ? upper[last] - v0[first] : upper[first] - v1[last];
+        double hi = rising ? upper_of(rising, last, through, v0, v1, peak) - v0[first]
+                           : upper_of(rising, first, through, v0, v1, peak) - v1[last];
         for (int64_t m = first; m <= last; m++) dv[m] = hi;
         k++;
     }
@@ -122,7 +125,8 @@ static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t 
    largest relative change into *change, whether the terms are still plain into *finite;
    the moves the damping held back into behind, their targets into wanted (n each at
    most): returns how many. Pieces of `piece` moves as there: a piece where no
-   acceleration moves keeps its off and term untouched. work: 3 n doubles, cont: n + 1;
+   acceleration moves keeps its off and term untouched. work: n + piece doubles (the ramps'
+   speed changes, a piece's new accelerations), cont: n + 1;
    aj and lim (or NULL): acc / jerk and acc * acc / jerk, which do not change from round to
    round (the same quotients, made once by numpy). */
 EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const uint8_t *through,
@@ -132,8 +136,8 @@ EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const ui
                            uint8_t *moved, int64_t piece, double nil_speed, int *finite,
                            double *change, int64_t *behind, double *wanted, double *work,
                            uint8_t *cont, const double *aj, const double *lim) {
-    double *upper = work, *dv = work + n, *out = work + 2 * n;
-    chain_dv(rising, n, phase, through, v0, v1, peak, cont, upper, dv);
+    double *dv = work, *out = work + n; /* (out: the piece's, out[k - start]) */
+    chain_dv(rising, n, phase, through, v0, v1, peak, cont, dv);
     int64_t n_behind = 0;
     double ch = 0.0;
     int fin = *finite;
@@ -162,7 +166,7 @@ EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const ui
                     n_behind++;
                 }
             }
-            out[k] = o;
+            out[k - start] = o;
             step[k] = (int8_t)((o > od ? 1 : 0) - (o < od ? 1 : 0));
             if (o != od) { /* (where o == od, o / od - 1 is 0 or NaN: no change either way) */
                 double rel = fabs(o / od - 1.0);
@@ -174,7 +178,7 @@ EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const ui
         }
         if (!any_moved) continue;
         for (int64_t k = start; k < stop; k++) {
-            if (moved[k]) a[k] = out[k];
+            if (moved[k]) a[k] = out[k - start];
             off[k] = a[k] != acc[k];
             double tm = a[k] * vmax(between[k], 0.0) * 2.0;
             term[k] = tm;

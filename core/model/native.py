@@ -31,7 +31,7 @@ from core.model.pieces import SPLIT, side_by_side, two_cores
 
 #: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
 #: another version of the source is not loaded.
-VERSION = 3
+VERSION = 4
 
 _P = ctypes.c_void_p
 _I = ctypes.c_int64
@@ -138,9 +138,10 @@ class Kernels:
         cols += [] if fixed is None else list(fixed)
         if through.size != n + 1 or any(c.size != n for c in cols) or piece < 1:
             raise ValueError("C kernel dense_round: columns of different lengths")
+        # (behind and wanted: pages the kernel does not write are never resident)
         behind = np.empty(n, dtype=np.intp)
         wanted = np.empty(n)
-        work = np.empty(3 * n)
+        work = np.empty(n + piece)
         cont = np.empty(n + 1, dtype=np.bool_)
         fin = ctypes.c_int(int(finite))
         change = ctypes.c_double(0.0)
