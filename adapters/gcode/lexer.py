@@ -272,8 +272,8 @@ def _words_library() -> ctypes.CDLL | None:
     return lib
 
 
-#: gcode_words' kinds of words (_words.c).
-_READ, _LONG = 0, 3
+#: gcode_words' kind of a well-formed number of more than MAX_DIGITS digits (_words.c).
+_LONG = 3
 
 
 def _words_in_c(lib: ctypes.CDLL, text: bytes) -> Found:
