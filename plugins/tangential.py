@@ -97,7 +97,7 @@ from core.engine.indicators import (
 )
 from core.model import geometry as g
 from core.model.arrays import nan_to_num
-from core.model.pieces import SPLIT, halves
+from core.model.pieces import SPLIT, rows_in_pieces
 from plugins.feed_limit import lowest_axis
 
 NAME = "tangential"
@@ -221,15 +221,10 @@ def corner_shares(
     # the GIL: stellabee1's 169k corners 53 -> 28 ms).
     share_t, share_n = np.empty((m, 3)), np.empty((m, 3))
 
-    def rows(s: slice) -> None:
-        for a in range(s.start, s.stop, CHUNK):
-            b = min(a + CHUNK, s.stop)
-            share_t[a:b], share_n[a:b] = _corner_shares(
-                t1[a:b], t2[a:b], turn, None if at is None else at[a:b]
-            )
+    def fill(s: slice) -> None:
+        share_t[s], share_n[s] = _corner_shares(t1[s], t2[s], turn, None if at is None else at[s])
 
-    if not halves(m, rows):
-        rows(slice(0, m))
+    rows_in_pieces(m, CHUNK, fill)
     return share_t, share_n
 
 
@@ -260,14 +255,11 @@ def _corner_feed(
     feed = np.empty(m)
     limit = np.empty(m, dtype=np.int64)
 
-    def rows(s: slice) -> None:
-        for a in range(s.start, s.stop, CHUNK):
-            b = min(a + CHUNK, s.stop)
-            piece = (shares[0][a:b], shares[1][a:b])
-            feed[a:b], limit[a:b] = _corner_feed_rows(piece, radius[a:b], machine)
+    def fill(s: slice) -> None:
+        piece = (shares[0][s], shares[1][s])
+        feed[s], limit[s] = _corner_feed_rows(piece, radius[s], machine)
 
-    if not halves(m, rows):
-        rows(slice(0, m))
+    rows_in_pieces(m, CHUNK, fill)
     return feed, limit
 
 

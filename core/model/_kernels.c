@@ -44,7 +44,7 @@ static inline double vmin(double a, double b) {
 
 /* The version of this interface: core/model/native.py loads a library of its own
    version only (a stale build beside newer Python code is not used). */
-EXPORT int64_t ncperf_kernels_version(void) { return 4; }
+EXPORT int64_t ncperf_kernels_version(void) { return 5; }
 
 /* core.engine.profile._Rounds._all_marks (every != 0: the moves first..first+count-1) or
    _marks_of of the moves at[first..first+count-1] (two threads take a half each): each move's peak, whether it accelerates (rise) or brakes
@@ -191,39 +191,13 @@ EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const ui
 }
 
 /* core.engine.profile._passes_of with finite (no NaN, no -0.0, terms >= 0: fmin is a plain
-   comparison and the clamp at 0 is left out) into out: the sums sequential as np.cumsum's
-   (the first term itself, then one term after the other), the minima running as
-   np.fmin.accumulate's; w and bwd work arrays of b2's size n1. */
-EXPORT void plain_passes(int64_t n1, const double *b2, const double *up, const double *dn,
-                         double *w, double *bwd, double *out) {
-    double wu = 0.0, wd = 0.0;
-    double least = b2[0];
-    for (int64_t i = 0; i < n1; i++) {
-        if (i) {
-            wu = i == 1 ? up[0] : wu + up[i - 1];
-            wd = i == 1 ? dn[0] : wd + dn[i - 1];
-        }
-        w[i] = wu;
-        bwd[i] = wd;
-        double x = b2[i] - wu;
-        if (x < least) least = x;
-        out[i] = least + wu;
-    }
-    least = b2[n1 - 1] + bwd[n1 - 1];
-    for (int64_t i = n1 - 1; i >= 0; i--) {
-        double wd2 = bwd[i];
-        double x = b2[i] + wd2;
-        if (x < least) least = x;
-        /* (an overflowed sum gives NaN here: np.minimum's rules) */
-        out[i] = sqrt(vmin(vmin(out[i], least - wd2), b2[i]));
-    }
-}
-
-/* plain_passes in three parts, the first two side by side on two threads: the forward
-   sums and pass into out (passes_forward), the backward sums and pass into bwd
-   (passes_backward: bwd[i] = the backward running minimum less the braking sum, the
-   number plain_passes takes the minimum with), then out = sqrt(min(out, bwd, b2))
-   (passes_join). The same operations on the same numbers as plain_passes. */
+   comparison and the clamp at 0 is left out), in three parts, the first two independent
+   (two threads may take them side by side): the forward sums (w) and pass into out
+   (passes_forward), the backward sums and pass into bwd (passes_backward: bwd[i] = the
+   backward running minimum less the braking sum), then out = sqrt(min(out, bwd, b2))
+   (passes_join). The sums sequential as np.cumsum's (the first term itself, then one term
+   after the other), the minima running as np.fmin.accumulate's; an overflowed sum gives
+   NaN in the join, np.minimum's rules. */
 EXPORT void passes_forward(int64_t n1, const double *b2, const double *up, double *w,
                            double *out) {
     double wu = 0.0;

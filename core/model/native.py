@@ -31,7 +31,7 @@ from core.model.pieces import SPLIT, side_by_side, two_cores
 
 #: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
 #: another version of the source is not loaded.
-VERSION = 4
+VERSION = 5
 
 _P = ctypes.c_void_p
 _I = ctypes.c_int64
@@ -55,8 +55,6 @@ class Kernels:
         lib.marks.restype = None
         lib.dense_round.argtypes = [ctypes.c_int, _I, *[_P] * 14, _I, _D, *[_P] * 8]
         lib.dense_round.restype = _I
-        lib.plain_passes.argtypes = [_I, *[_P] * 6]
-        lib.plain_passes.restype = None
         lib.passes_forward.argtypes = [_I, *[_P] * 4]
         lib.passes_forward.restype = None
         lib.passes_backward.argtypes = [_I, *[_P] * 3]
@@ -88,21 +86,20 @@ class Kernels:
         count = n if every else at.size
         if not every and count and not (0 <= int(at.min()) and int(at.max()) < n):
             raise IndexError("C kernel marks: a move out of range")
-        args = (
-            _ptr(at, np.intp) if at.size else None, count, int(every),
+        p_at = _ptr(at, np.intp) if at.size else None
+        rest = (
             _ptr(v, f), _ptr(a_up, f), _ptr(a_dn, f), _ptr(between, f), _ptr(cap, f),
             tols[0], tols[1],
             _ptr(peak, f), _ptr(rise, b), _ptr(fall, b), _ptr(t_up, b), _ptr(t_dn, b),
         )  # fmt: skip
-        ptr, _, every_, *rest = args
         if count < 2 * SPLIT or not two_cores():
-            self.lib.marks(ptr, 0, count, every_, *rest)
+            self.lib.marks(p_at, 0, count, int(every), *rest)
             return
         # each move's marks its own: the halves on two threads (disjoint outputs)
         half = count // 2
         side_by_side(
-            lambda: self.lib.marks(ptr, 0, half, every_, *rest),
-            lambda: self.lib.marks(ptr, half, count - half, every_, *rest),
+            lambda: self.lib.marks(p_at, 0, half, int(every), *rest),
+            lambda: self.lib.marks(p_at, half, count - half, int(every), *rest),
         )
 
     def dense_round(
@@ -166,14 +163,20 @@ class Kernels:
             raise ValueError("C kernel plain_passes: columns of different lengths")
         p_b2, p_up, p_dn = _ptr(b2, f), _ptr(up, f), _ptr(dn, f)
         p_w, p_bwd, p_out = _ptr(w, f), _ptr(bwd, f), _ptr(out, f)
+
+        def forward() -> None:
+            self.lib.passes_forward(n1, p_b2, p_up, p_w, p_out)
+
+        def backward() -> None:
+            self.lib.passes_backward(n1, p_b2, p_dn, p_bwd)
+
         if n1 < SPLIT or not two_cores():
-            self.lib.plain_passes(n1, p_b2, p_up, p_dn, p_w, p_bwd, p_out)
+            forward()
+            backward()
+            self.lib.passes_join(0, n1, p_b2, p_bwd, p_out)
             return
         # the forward and the backward pass side by side, then their minimum (in halves)
-        side_by_side(
-            lambda: self.lib.passes_forward(n1, p_b2, p_up, p_w, p_out),
-            lambda: self.lib.passes_backward(n1, p_b2, p_dn, p_bwd),
-        )
+        side_by_side(forward, backward)
         h = n1 // 2
         side_by_side(
             lambda: self.lib.passes_join(0, h, p_b2, p_bwd, p_out),

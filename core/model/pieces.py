@@ -49,13 +49,19 @@ def piecewise(n: int, dtype: type, f: Callable[[slice], NDArray], size: int = PI
 SPLIT = 20_000
 
 
+def usable_cpus() -> int:
+    """The CPUs this process may run on (its affinity where the platform tells it, else all
+    the machine's), at least 1."""
+    try:
+        return max(len(os.sched_getaffinity(0)), 1)
+    except AttributeError:  # no sched_getaffinity (macOS, Windows)
+        return max(os.cpu_count() or 1, 1)
+
+
 @cache
 def two_cores() -> bool:
     """Whether this process may run on two cores or more."""
-    try:
-        return len(os.sched_getaffinity(0)) >= 2
-    except AttributeError:  # (no sched_getaffinity: macOS, Windows)
-        return (os.cpu_count() or 1) >= 2
+    return usable_cpus() >= 2
 
 
 def side_by_side(first: Callable[[], T], second: Callable[[], U]) -> tuple[T, U]:
@@ -111,6 +117,20 @@ def _worker() -> _Worker:
     if not _workers or not _workers[0].thread.is_alive():
         _workers[:] = [_Worker()]
     return _workers[0]
+
+
+def rows_in_pieces(m: int, size: int, fill: Callable[[slice], object]) -> None:
+    """``fill`` over consecutive slices of at most ``size`` rows covering ``0..m``, the
+    pieces of the two halves on two threads where :func:`halves` splits: ``fill`` is row
+    by row and writes its rows of the caller's arrays (bounded temporaries, the same
+    values as over all rows at once)."""
+
+    def run(h: slice) -> None:
+        for a in range(h.start, h.stop, size):
+            fill(slice(a, min(a + size, h.stop)))
+
+    if not halves(m, run):
+        run(slice(0, m))
 
 
 def halves(m: int, f: Callable[[slice], object]) -> bool:

@@ -26,13 +26,14 @@ from __future__ import annotations
 
 import io
 import multiprocessing
-import os
 import pickle
 import signal
 import threading
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
+
+from core.model.pieces import usable_cpus
 
 R = TypeVar("R")
 
@@ -55,12 +56,9 @@ LOCK = threading.Lock()
 
 
 def default_jobs() -> int:
-    """The worker processes to use by default: the CPUs this process may run on (its
-    affinity where the platform tells it, else all the machine's), at least 1."""
-    try:
-        return max(len(os.sched_getaffinity(0)), 1)
-    except AttributeError:  # no sched_getaffinity (macOS, Windows)
-        return max(os.cpu_count() or 1, 1)
+    """The worker processes to use by default: the CPUs this process may run on
+    (:func:`core.model.pieces.usable_cpus`)."""
+    return usable_cpus()
 
 
 def can_fork() -> bool:
