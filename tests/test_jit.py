@@ -13,6 +13,7 @@ from core import Ncperf, load_preset
 from core.engine.profile import Profile, build_profile
 from core.model.jit import NO_JIT_ENV, allow, compiled
 from core.model.sampling import PROJECTION_STEP
+from tests.bits import same
 from tests.conftest import ROOT
 from tests.test_projection import _cases
 
@@ -24,28 +25,6 @@ PROGRAM = ROOT / "examples" / "zlevel_cavity_chords.ngc"
 @pytest.fixture(autouse=True)
 def _allowed() -> None:
     allow()  # (as the diagnosis does)
-
-
-def _bits(x: np.ndarray) -> np.ndarray:
-    """The array's bytes as integers: NaN, -0.0 and +0.0 told apart."""
-    x = np.ascontiguousarray(x)
-    return x.view(np.int64) if x.dtype == np.float64 else x
-
-
-def _same(a: object, b: object) -> None:
-    if isinstance(a, tuple):
-        assert isinstance(b, tuple) and len(a) == len(b)
-        for x, y in zip(a, b, strict=True):
-            _same(x, y)
-    elif isinstance(a, np.ndarray):
-        assert isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape
-        np.testing.assert_array_equal(_bits(a), _bits(b))
-    elif dataclasses.is_dataclass(a):  # (Profile.arc_ramps)
-        assert type(a) is type(b)
-        for f in dataclasses.fields(a):
-            _same(getattr(a, f.name), getattr(b, f.name))
-    else:
-        assert a == b
 
 
 def _both(monkeypatch, fn):
@@ -67,7 +46,7 @@ def test_profile_and_its_speeds_are_numpys(monkeypatch, preset):
     plain, fast = _both(monkeypatch, lambda: build_profile(ev))
     for f in dataclasses.fields(Profile):
         if f.name != "evaluation":
-            _same(getattr(plain, f.name), getattr(fast, f.name))
+            same(getattr(plain, f.name), getattr(fast, f.name))
     assert (plain.ramps is None) == (preset == "linuxcnc-sim")
     tp = ev.toolpath
     rng = np.random.default_rng(5)
@@ -81,7 +60,7 @@ def test_profile_and_its_speeds_are_numpys(monkeypatch, preset):
         ]
     )
     a, b = _both(monkeypatch, lambda: plain.speed_at(s))
-    _same(a, b)
+    same(a, b)
 
 
 def test_projection_is_numpys(monkeypatch):
@@ -95,10 +74,10 @@ def test_projection_is_numpys(monkeypatch):
                 s_true = rng.uniform(-0.5, tp.end_s[-1] + 0.5, 20_000)
                 q = tp.point_at(s_true) + rng.normal(0.0, spread, (s_true.size, 3))
                 guess = s_true + rng.normal(0.0, off, s_true.size)
-                _same(*_both(monkeypatch, partial(samples.project_near, q, guess, half_width)))
+                same(*_both(monkeypatch, partial(samples.project_near, q, guess, half_width)))
         mid = 0.5 * (samples.points[1:] + samples.points[:-1])
         g = 0.5 * (samples.s[1:] + samples.s[:-1])
-        _same(*_both(monkeypatch, partial(samples.project_near, mid, g)))
+        same(*_both(monkeypatch, partial(samples.project_near, mid, g)))
 
 
 def test_line_search_is_numpys(monkeypatch):
@@ -131,7 +110,7 @@ def test_line_search_is_numpys(monkeypatch):
     unknown = rng.random(line.size) < 0.01
     line[unknown] = np.where(rng.random(int(unknown.sum())) < 0.5, 0, int(tp.line.max()) + 1000)
     plain, fast = _both(monkeypatch, lambda: _project(tp, q, line, path))
-    _same(plain, fast)
+    same(plain, fast)
     assert np.isfinite(plain[1]).all()
     # a path that jumps (a move not starting where the one before ended): the second half's
     # points 0.5 mm over, the samples of every other line with them
@@ -140,7 +119,7 @@ def test_line_search_is_numpys(monkeypatch):
     jumped.points[half:] += [0.5, 0.0, 0.0]
     over = (line % 2 == 1)[:, None] * np.array([0.5, 0.0, 0.0])
     plain, fast = _both(monkeypatch, lambda: _project(tp, q + over, line, jumped))
-    _same(plain, fast)
+    same(plain, fast)
 
 
 def _numbers(rng: np.random.Generator, n: int) -> list[str]:
@@ -233,7 +212,7 @@ def test_trace_reader_is_numpys(monkeypatch, tmp_path):
             assert a == b, what
             assert not taken, f"{what}: {a}"
         else:
-            _same(a, b)
+            same(a, b)
 
 
 def test_sorted_places_are_searchsorteds():
@@ -273,7 +252,7 @@ def test_lazy_walks_are_pythons(monkeypatch):
         first = np.unique(np.concatenate([[0], rng.integers(0, n, n // 2)])).astype(np.int64)
         open2 = rng.uniform(0.0, 3e3, first.size)
         depth, cutoff = (50, 4) if trial % 4 else (int(rng.integers(1, 9)), int(rng.integers(0, 6)))
-        _same(
+        same(
             *_both(monkeypatch, partial(lazy_walks, dn, lim2, tangent, first, open2, depth, cutoff))
         )
 

@@ -21,6 +21,7 @@ from core.engine.profile import Profile, build_profile
 from core.model.jit import NO_JIT_ENV, disabled
 from core.model.pieces import SPLIT, side_by_side, two_cores
 from core.model.tolerances import TOL
+from tests.bits import same
 from tests.conftest import ROOT, shared
 
 if nat.native() is None or _words_library() is None:
@@ -38,29 +39,6 @@ def _c_not_numba(monkeypatch):
     """The C kernels where kernels run: numba's (allowed by other tests' diagnoses in this
     process) would stand in first."""
     monkeypatch.setattr(nat, "compiled", lambda: None)
-
-
-def _bits(x: np.ndarray) -> np.ndarray:
-    x = np.ascontiguousarray(x)
-    return x.view(np.int64) if x.dtype == np.float64 else x
-
-
-def _same(a: object, b: object, what: str = "") -> None:
-    if isinstance(a, tuple | list):
-        assert isinstance(b, type(a)) and len(a) == len(b), what
-        for i, (x, y) in enumerate(zip(a, b, strict=True)):
-            _same(x, y, f"{what}[{i}]")
-    elif isinstance(a, np.ndarray):
-        assert isinstance(b, np.ndarray) and a.dtype == b.dtype and a.shape == b.shape, what
-        np.testing.assert_array_equal(_bits(a), _bits(b), err_msg=what)
-    elif dataclasses.is_dataclass(a):
-        assert type(a) is type(b), what
-        for f in dataclasses.fields(a):
-            _same(getattr(a, f.name), getattr(b, f.name), f"{what}.{f.name}")
-    elif isinstance(a, float) and a != a:
-        assert isinstance(b, float) and b != b, what
-    else:
-        assert a == b, what
 
 
 def _numpy_then_c(monkeypatch, fn):
@@ -105,17 +83,17 @@ def test_marks_are_numpys_on_awkward_columns():
         )
         tols = (TOL.rel_equal, TOL.nil_distance)
         lib.marks(np.zeros(0, np.intp), True, v, a_up, a_dn, between, cap, tols, out)
-        _same(tuple(want[:3]), out[:3], f"every, n={n}")
-        _same(want[3], out[3][1:], f"through_up n={n}")
-        _same(want[4], out[4][1:], f"through_dn n={n}")
+        same(tuple(want[:3]), out[:3], f"every, n={n}")
+        same(want[3], out[3][1:], f"through_up n={n}")
+        same(want[4], out[4][1:], f"through_dn n={n}")
         # some moves only: the others keep what they had
         at = np.flatnonzero(rng.random(n) < 0.5)
         out2 = (np.full(n, -7.0), *(np.zeros(m, bool) for m in (n, n, n + 1, n + 1)))
         lib.marks(at, False, v, a_up, a_dn, between, cap, tols, out2)
         rest = np.setdiff1d(np.arange(n), at)
-        _same(out2[0][at], want[0][at], "peak at")
+        same(out2[0][at], want[0][at], "peak at")
         assert (out2[0][rest] == -7.0).all()
-        _same(out2[3][at + 1], want[3][at], "through_up at")
+        same(out2[3][at + 1], want[3][at], "through_up at")
         assert not out2[3][rest + 1].any()
 
 
@@ -190,7 +168,7 @@ def test_rounds_are_numpys(monkeypatch, n, share, seed):
     :data:`SPLIT` moves the two directions and the marks' halves on two threads."""
     plain, fast = _numpy_then_c(monkeypatch, lambda: _run_rounds(_new_rounds(seed, n, share), 12))
     for r, (a, b) in enumerate(zip(plain, fast, strict=True)):
-        _same(a, b, f"round {r}")
+        same(a, b, f"round {r}")
 
 
 def test_big_rounds_take_two_threads(monkeypatch):
@@ -228,7 +206,7 @@ def test_side_by_side_returns_both_and_raises_either():
 def _profiles_same(plain: Profile, fast: Profile) -> None:
     for f in dataclasses.fields(Profile):
         if f.name != "evaluation":
-            _same(getattr(plain, f.name), getattr(fast, f.name), f.name)
+            same(getattr(plain, f.name), getattr(fast, f.name), f.name)
 
 
 @pytest.mark.parametrize("preset", ["siemens-840d", "linuxcnc-sim"])
@@ -315,7 +293,7 @@ def test_halves_on_two_threads_are_one_threads(monkeypatch, tmp_path):
     calls.clear()
     one = run()
     assert not calls
-    _same(one, two)
+    same(one, two)
 
 
 def _plain_texts(rng: np.random.Generator) -> list[bytes]:
@@ -368,7 +346,7 @@ def test_gcode_scanner_is_numpys():
         texts.append(_plain_text(src, np.zeros(src.n_lines, dtype=bool)))
     for text in texts:
         c = np.frombuffer(text, dtype=np.uint8)
-        _same(lexer._words_in_numpy(text, c)[:5], lexer._words_in_c(lib, text)[:5], repr(text))
+        same(lexer._words_in_numpy(text, c)[:5], lexer._words_in_c(lib, text)[:5], repr(text))
         assert lexer._words_in_numpy(text, c)[5] == lexer._words_in_c(lib, text)[5], text
 
 
@@ -382,7 +360,7 @@ def test_tokens_of_real_programs_are_numpys(monkeypatch):
     for program in [*EXAMPLES, *PROGRAMS, stellabee1]:
         src = Source(str(program), program.read_bytes())
         plain, fast = _numpy_then_c(monkeypatch, lambda: _tokens(src))  # noqa: B023
-        _same(plain, fast, program.name)
+        same(plain, fast, program.name)
 
 
 def _tokens(src: object) -> object:
