@@ -215,6 +215,47 @@ def test_trace_reader_is_numpys(monkeypatch, tmp_path):
             same(a, b)
 
 
+def test_lag_and_speed_of_filtered_positions_are_numpys(monkeypatch):
+    """The first-order lag (first_order: the same blocks, each the closed form over a
+    cumsum) and the speed of positions (path_speed: np.gradient's central and one-sided
+    differences, np.linalg.norm's sum of squares), bit for bit: short and long columns
+    (one block, many, a last short one), poles from negligible to slow, values of mixed
+    magnitude and sign, zeros and signed zeros."""
+    from core.engine.predict import _first_order, _path_speed
+
+    rng = np.random.default_rng(11)
+    for m in (2, 3, 7, 2049, 5000, 40_000):
+        pos = np.cumsum(rng.normal(0.0, 0.02, (m, 3)), axis=0) + rng.normal(0.0, 300.0, 3)
+        pos[rng.integers(0, m, m // 10 + 1), 1] = rng.choice([0.0, -0.0])
+        for dt in (0.001, 0.0004):
+            same(*_both(monkeypatch, partial(_path_speed, pos, dt)))
+        for tau in (1e-4, 0.002, 0.02, 0.3):
+            a = np.exp(-0.001 / tau)
+            same(*_both(monkeypatch, partial(_first_order, pos, a)))
+    # a (m,) column: numpy's code alone (the kernel takes (m, columns))
+    v = rng.normal(size=3000)
+    same(*_both(monkeypatch, partial(_first_order, v, 0.97)))
+
+
+def test_filtered_prediction_is_numpys(monkeypatch):
+    """A prediction through a servo lag and a setpoint filter (the lag and the speed of
+    the filtered positions by the kernels, their projection onto the path): the motion a
+    trace would show and its speeds at places, the same bits."""
+    from core.engine.effects import setup_for
+    from core.engine.predict import predict
+
+    nc = Ncperf()
+    tp = nc.extract(str(PROGRAM))
+    base = setup_for(load_preset("siemens-840d"), nc.effects())
+    s = np.linspace(0.0, tp.end_s[-1], 20_001)
+
+    def motion():
+        pred = predict(nc.indicators, tp, base.replace(servo_tau=0.012, filter_window=0.006))
+        return (*pred._filtered, pred.speed_at(s), pred.speed_at(s, commanded=True))
+
+    same(*_both(monkeypatch, motion))
+
+
 def test_sorted_places_are_searchsorteds():
     """sorted_places (each search from the last one's place) gives np.searchsorted's places:
     sorted and shuffled needles, values equal to the array's (duplicates among them), just

@@ -140,6 +140,63 @@ def test_fit_each_returns_the_effects_in_their_order():
         assert _bits(two[name][1][0].speed_at(s)) == _bits(one[name][1][0].speed_at(s))
 
 
+def test_fits_start_longest_first(monkeypatch):
+    """The order the fits start in: by the candidates each search lays out (a 1-D grid of
+    11 points, 8 refinement rounds of two trials and the defaults check: 1 + 11 + 17 = 29;
+    block_cycle_time's 31 points: 49; two parameters on a 6 x 6 grid, then both 11-point
+    lines and their refinement: 1 + 36 + 22 + 34 = 93), a candidate of an effect that
+    acts in time only (a servo lag: one plan, the motion filtered again) weighing
+    FILTERED_COST; and no fit scores more candidates than laid out."""
+    import core.diagnosis.fit as fit_module
+    from core.diagnosis import parallel
+    from core.diagnosis.fit import scores_planned
+
+    nc = Ncperf(make_plugin_manager(entry_points=False))
+    effects = nc.effects()
+    tp, al, base = _case(nc)
+    assert scores_planned(effects["exact_stop"]) == 1
+    assert scores_planned(effects["corner_tolerance"]) == 29
+    assert scores_planned(effects["block_cycle_time"]) == 49
+    assert scores_planned(effects["feed_override"]) == 93
+    assert parallel.cost(effects["servo_lag"], base) == 29 * parallel.FILTERED_COST
+    assert parallel.cost(effects["corner_tolerance"], base) == 29
+
+    from core.diagnosis.resample import resample, split
+
+    data, _ = split([resample(tp, al, "t")])
+    scored: dict[str, int] = {}
+    real_fit = fit_module.fit
+
+    def counted(indicators_of, tps, base_, eff, data_, objective=fit_module.FEED):
+        seen = set()
+        real_apply = eff.apply
+
+        def apply(setup, values):
+            seen.add(tuple(sorted(values.items())))
+            return real_apply(setup, values)
+
+        out = real_fit(indicators_of, tps, base_, dataclasses.replace(eff, apply=apply), data_)
+        scored[eff.name] = len(seen)
+        return out
+
+    monkeypatch.setattr(parallel, "fit", counted)
+    started: list[int] = []
+
+    def in_turn(fn, count, workers, *, order=None, shared=(), done=None):
+        started.extend(order)
+        return [fn(k) for k in range(count)]
+
+    monkeypatch.setattr(parallel, "forked_map", in_turn)
+    names = ("exact_stop", "corner_tolerance", "feed_override", "servo_lag", "axis_dynamics")
+    few = {k: effects[k] for k in names}
+    fit_each(nc.indicators, [tp], base, few, data, jobs=2)
+    assert [names[k] for k in started] == [
+        "axis_dynamics", "servo_lag", "feed_override", "corner_tolerance", "exact_stop"
+    ]  # fmt: skip
+    for name, eff in few.items():
+        assert 1 <= scored[name] <= scores_planned(eff), name
+
+
 def _in_a_worker(jobs: int) -> tuple[object, list[str], bool]:
     d, lines = _diagnosed(jobs)
     return fingerprint(d), lines, can_fork()

@@ -260,3 +260,43 @@ def test_ramp_place_guess_gives_the_halvings_bracket(rising):
     a_p, b_p = _bisect_ramp(lo, dv, a, vb * vb, span, shape, goal, rising)
     a_h, b_h = _halvings(_place_terms(lo, dv, a, vb * vb, span, shape), goal, rising)
     assert np.array_equal(a_p, a_h) and np.array_equal(b_p, b_h)
+
+
+def test_rounds_memo_gives_the_rounds_of_the_same_inputs(nc, monkeypatch):
+    """A fit's memo of the last jerk rounds (RoundsMemo): a profile whose rounds have the
+    inputs of the last ones (the same evaluation, or a machine that differs where the
+    rounds do not read: its name) takes their outcome without iterating; one whose inputs
+    differ (a lower acceleration) iterates; every profile, bit for bit, the one built
+    without a memo."""
+    import core.engine.profile as profile_module
+    from core import load_preset
+    from core.engine.profile import Profile, RoundsMemo
+    from tests.bits import same
+    from tests.conftest import ROOT
+
+    tp = nc.extract(str(ROOT / "examples" / "zlevel_cavity_chords.ngc"))
+    m = load_preset("siemens-840d")
+    renamed = dataclasses.replace(m, name="another name")
+    slower = dataclasses.replace(m, max_acceleration=m.max_acceleration * 0.5)
+    evs = [nc.evaluate(tp, x) for x in (m, m, renamed, slower, m)]
+    iterated = []
+    real = profile_module._Rounds
+
+    def counted(*args, **kw):
+        iterated.append(True)
+        return real(*args, **kw)
+
+    monkeypatch.setattr(profile_module, "_Rounds", counted)
+    memo = RoundsMemo()
+    with_memo = [build_profile(ev, memo=memo) for ev in evs]
+    # the first iterates, the same and the renamed take its rounds, the slower iterates, the
+    # last (as the first) iterates again: the memo keeps the last rounds only
+    assert len(iterated) == 3
+    for ev, got in zip(evs, with_memo, strict=True):
+        want = build_profile(ev)
+        for f in dataclasses.fields(Profile):
+            if f.name != "evaluation":
+                same(getattr(got, f.name), getattr(want, f.name))
+    assert not np.array_equal(with_memo[3].a_up, with_memo[0].a_up)
+    # what a hit gives is a copy: a profile's columns are its own
+    assert with_memo[1].a_up is not with_memo[0].a_up

@@ -19,6 +19,7 @@ from core.diagnosis.rules import AT_BOUND, GRID_1D, GRID_2D, GRID_ND, REFINE
 from core.engine.effects import Effect, Param, Setup
 from core.engine.indicators import Indicator, IndicatorSource
 from core.engine.predict import Prediction, predict, retimed, same_plan
+from core.engine.profile import RoundsMemo
 from core.model.machine import Machine
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
@@ -50,13 +51,15 @@ def predict_all(
     plans: list[tuple[Setup, list[Prediction]]] | None = None,
     *,
     keep: bool = True,
+    memos: Sequence[RoundsMemo] | None = None,
 ) -> list[Prediction]:
     """The prediction of ``setup`` for every program. ``plans``: predictions made before
     (most recent last, kept to PLANS); one of a setup that plans alike (differs in the
     time-domain filters only) gives its evaluations and profiles, and this one is added;
     else one evaluated alike gives its profile (:func:`core.engine.predict.predict`).
     ``keep`` False: the plans only give profiles (the predictions are made again, and not
-    added)."""
+    added). ``memos``: each program's last jerk rounds (:class:`RoundsMemo`), which a
+    profile with the same rounds' inputs takes."""
     if plans is not None and keep:
         for k in range(len(plans) - 1, -1, -1):
             setup_k, preds_k = plans[k]
@@ -64,7 +67,14 @@ def predict_all(
                 return [retimed(p, setup) for p in preds_k]
     earlier = plans or []
     preds = [
-        predict(indicators_of, tp, setup, [p[i] for _, p in earlier]) for i, tp in enumerate(tps)
+        predict(
+            indicators_of,
+            tp,
+            setup,
+            [p[i] for _, p in earlier],
+            None if memos is None else memos[i],
+        )
+        for i, tp in enumerate(tps)
     ]
     if plans is not None and keep:
         plans.append((setup, preds))
@@ -91,13 +101,14 @@ def fit(
     # are kept -- the others' are made again, the same, at the end)
     cache: dict[tuple, tuple[float, Setup]] = {}
     plans: list[tuple[Setup, list[Prediction]]] = []
+    memos = [RoundsMemo() for _ in tps]
     lowest: list[tuple[tuple, float, list[Prediction]]] = []
 
     def score(values: dict[str, float]) -> float:
         key = _key(eff, values)
         if key not in cache:
             setup = eff.apply(base, values)
-            preds = predict_all(indicators_of, tps, setup, plans)
+            preds = predict_all(indicators_of, tps, setup, plans, memos=memos)
             g = objective.gap(preds, data, "calibration")
             cache[key] = (g, setup)
             if not lowest or g < lowest[0][1]:
@@ -110,7 +121,7 @@ def fit(
         key = _key(eff, best)
         if lowest and lowest[0][0] == key:
             return best, lowest[0][2]
-        return best, predict_all(indicators_of, tps, cache[key][1], plans, keep=False)
+        return best, predict_all(indicators_of, tps, cache[key][1], plans, keep=False, memos=memos)
 
     if not eff.params:
         score({})
@@ -142,6 +153,28 @@ def fit(
             line = [best | {p.name: float(x)} for x in grid(p, points_1d(p))]
             best = min([best, *line], key=score)
     return result(_refined(eff, best, defaults, score))
+
+
+def scores_planned(eff: Effect) -> int:
+    """About how many candidates :func:`fit` scores for ``eff`` (at most: the search's
+    grids, lines and refinement rounds as they are laid out, before its cache finds
+    repeats): what a fit costs, for running the longest first (:mod:`.parallel`)."""
+    params = eff.params
+    if not params:
+        return 1
+    lines = sum(points_1d(p) for p in params)
+    refine = 2 * REFINE * len(params) + len(params)  # two trials a round, then the defaults
+    if eff.stages:
+        first = [p for p in params if p.name in eff.stages[0]]
+        per = points_1d(first[0]) if len(first) == 1 else GRID_2D if len(first) == 2 else GRID_ND
+        later = lines - sum(points_1d(p) for p in first)
+        # the first stage's grid and its lines twice; the later stages' lines twice from
+        # each of the two ends; each end refined
+        return 1 + per ** len(first) + 2 * (lines - later) + 2 * 2 * later + 2 * refine
+    if len(params) == 1:
+        return 1 + lines + refine
+    per = GRID_2D if len(params) == 2 else GRID_ND
+    return 1 + per ** len(params) + lines + refine
 
 
 def _remembered(indicators_of: IndicatorSource) -> IndicatorSource:

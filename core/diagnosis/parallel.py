@@ -2,10 +2,10 @@
 
 The fits of one step of a diagnosis -- every effect on top of the same setup, on the same
 data -- are independent and deterministic: :func:`fit_each` runs them on forked processes
-(:func:`core.model.workers.forked_map`), those with the most parameters first (the longest
-fits start first: the diagnose benchmark's axis_dynamics, 9 parameters, takes 5.6 s of its
-16.6 s of fits), and returns them in the effects' order, the same to the bit as one after
-the other.
+(:func:`core.model.workers.forked_map`), the longest first (:func:`cost`: the diagnose
+benchmark's axis_dynamics, 9 parameters, takes 7.2 s of its 17.4 s of fits; started last, a
+long fit would keep one worker busy while the other waits), and returns them in the
+effects' order, the same to the bit as one after the other.
 """
 
 from __future__ import annotations
@@ -13,11 +13,11 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from typing import Any
 
-from core.diagnosis.fit import fit
+from core.diagnosis.fit import fit, scores_planned
 from core.diagnosis.objective import FEED, Objective
 from core.engine.effects import Effect, Setup
 from core.engine.indicators import IndicatorSource
-from core.engine.predict import Prediction
+from core.engine.predict import TIME_DOMAIN, Prediction, same_plan
 from core.model.toolpath import ToolPath
 from core.model.workers import forked_map, workers_for
 
@@ -30,6 +30,26 @@ Fitted = tuple[dict[str, float], list[Prediction]]
 STEP = "fitting {name} ({k} of {n} effects)"
 START = "fitting {n} effects on {workers} processes"
 DONE = "fitted {name} ({k} of {n} effects)"
+
+#: What a candidate of an effect that acts in time only (a servo lag, a setpoint filter:
+#: its candidates share one plan) costs against one that plans anew: it filters the whole
+#: motion and projects it back onto the path. Measured on the diagnose benchmark
+#: (2026-11-28): 60-76 ms a candidate against 11-24 ms (median 17).
+FILTERED_COST = 4.0
+
+
+def cost(eff: Effect, base: Setup) -> float:
+    """What fitting ``eff`` on top of ``base`` costs, roughly (in candidates that plan
+    anew): its candidates (:func:`core.diagnosis.fit.scores_planned`), each weighted
+    FILTERED_COST where the effect changes the motion in time only. For the order in which
+    the fits start; their results do not depend on it."""
+    n = float(scores_planned(eff))
+    if eff.params:
+        far = eff.apply(base, {p.name: p.high for p in eff.params})
+        timed = any(getattr(far, f) != getattr(base, f) for f in TIME_DOMAIN)
+        if timed and same_plan(base, far):
+            n *= FILTERED_COST
+    return n
 
 
 def fit_each(
@@ -76,12 +96,14 @@ def fit_each(
         return fit(indicators_of, tps, base, effects[names[k]], data_of(names[k]), objective)
 
     say(start.format(n=n, workers=workers))
+    costs = [cost(effects[name], base) for name in names]
     fitted = forked_map(
         one,
         n,
         workers,
-        # the longest fits first (those with the most parameters), so that none starts last
-        order=sorted(range(n), key=lambda k: -len(effects[names[k]].params)),
+        # the longest fits first, so that none starts last (ties: those fitted on the rapids
+        # too, which have more data, then the effects' order)
+        order=sorted(range(n), key=lambda k: (-costs[k], not effects[names[k]].rapids)),
         # the predictions refer to the tool paths: the parent's own, not copies
         shared=tps,
         done=lambda k, i: say(done.format(name=names[k], k=i, n=n)),

@@ -15,7 +15,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from core.engine.effects import Setup
 from core.engine.indicators import Evaluation, Indicator, IndicatorSource, combine
-from core.engine.profile import Profile, build_profile
+from core.engine.profile import Profile, RoundsMemo, build_profile
+from core.model.jit import compiled
 from core.model.sampling import PROJECTION_STEP, isotonic
 from core.model.tolerances import TOL
 from core.model.toolpath import PathMode, ToolPath
@@ -184,7 +185,7 @@ class Prediction:
         if su.servo_tau > 0:
             a = np.exp(-dt / su.servo_tau)
             pos = _first_order(pos, a)
-        v = np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
+        v = _path_speed(pos, dt)
         # Where the filtered positions are on the path: near the setpoint of tau earlier
         # (within a millimetre of it).
         guess = np.interp(t - su.servo_tau, t, s)
@@ -275,6 +276,15 @@ def overlap_column(
     return np.where(ok, col, np.inf), inside & ok
 
 
+def _path_speed(pos: NDArray[np.float64], dt: float) -> NDArray[np.float64]:
+    """The speed of (m, 3) positions sampled every ``dt`` s: the norm of their gradient in
+    time (central differences, one-sided at the ends)."""
+    kernels = compiled()
+    if kernels is not None and pos.shape[0] >= 2:  # the same operations point by point
+        return kernels.path_speed(np.ascontiguousarray(pos), dt)
+    return np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1)
+
+
 def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:
     """y[k] = a y[k-1] + (1 - a) v[k], y[0] = v[0], vectorised in blocks of a few thousand;
     ``v`` (m,) or (m, columns), each column on its own."""
@@ -287,6 +297,9 @@ def _first_order(v: NDArray[np.float64], a: float) -> NDArray[np.float64]:
     block = int(max(1, min(2048, 25.0 / -np.log(a))))
     powers = a ** np.arange(1, block + 1)
     inverse = a ** np.arange(1, block + 1)
+    kernels = compiled()
+    if kernels is not None and v.ndim == 2:  # the same blocks element by element
+        return kernels.first_order(np.ascontiguousarray(v), a, powers, inverse)
     if v.ndim == 2:
         powers, inverse = powers[:, None], inverse[:, None]
     for c in range(0, n, block):
@@ -370,11 +383,13 @@ def same_evaluation(a: Evaluation, b: Evaluation) -> bool:
     )
 
 
-def _profile_of(ev: Evaluation, setup: Setup, earlier: Sequence[Prediction]) -> Profile | None:
+def _profile_of(
+    ev: Evaluation, setup: Setup, earlier: Sequence[Prediction], memo: RoundsMemo | None
+) -> Profile | None:
     """The profile of ``ev`` under ``setup``: that of an ``earlier`` prediction built from
     the same inputs (:func:`same_evaluation`, the same look-ahead, end and arc factors) --
     build_profile is a function of them alone, so its columns are the ones a new build
-    gives -- with ``ev`` as its evaluation; else built."""
+    gives -- with ``ev`` as its evaluation; else built (with ``memo``, the last rounds)."""
     if not setup.ramps:
         return None
     for old in reversed(earlier):
@@ -389,7 +404,11 @@ def _profile_of(ev: Evaluation, setup: Setup, earlier: Sequence[Prediction]) -> 
         ):
             return dataclasses.replace(old.profile, evaluation=ev)
     return build_profile(
-        ev, lookahead=setup.lookahead, end_factor=setup.end_factor, arc_factor=setup.arc_factor
+        ev,
+        lookahead=setup.lookahead,
+        end_factor=setup.end_factor,
+        arc_factor=setup.arc_factor,
+        memo=memo,
     )
 
 
@@ -398,6 +417,7 @@ def predict(
     tp: ToolPath,
     setup: Setup,
     earlier: Sequence[Prediction] = (),
+    memo: RoundsMemo | None = None,
 ) -> Prediction:
     """The prediction of ``setup`` on ``tp`` (see :mod:`core.engine.effects` for the steps).
 
@@ -411,6 +431,9 @@ def predict(
     earlier : sequence of Prediction
         Predictions made before (a fit's recent candidates): where one was built from the
         same evaluation, its profile is taken, not built again (the same values).
+    memo : RoundsMemo, optional
+        The last jerk rounds of this program's profiles (a fit's): where a profile's rounds
+        have the same inputs, their outcome is taken (:func:`core.engine.profile.build_profile`).
     """
     tp2 = tp
     if setup.feed_scale != 1.0:
@@ -483,5 +506,5 @@ def predict(
             dataclasses.replace(ind, feed=ind.feed * setup.cap_scale) for ind in indicators
         ]
     ev = combine(tp2, m, indicators)
-    profile = _profile_of(ev, setup, earlier)
+    profile = _profile_of(ev, setup, earlier, memo)
     return Prediction(setup=setup, evaluation=ev, profile=profile, path=tp)

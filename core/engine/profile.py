@@ -2170,6 +2170,46 @@ def _exact_blend_times(
 BLEND_SHAPE_STEPS = 30
 
 
+class RoundsMemo:
+    """The last jerk rounds :func:`build_profile` ran with a memo: their inputs (the window
+    caps, the caps, the accelerations and jerks, the lengths between the holds: all the
+    rounds read) and their outcome (the boundary speeds, the accelerations up and down).
+
+    A fit's candidates often plan the same: an axis factor on an axis the program hardly
+    moves, an arc limit on a program without arcs (the diagnose benchmark: 175 of its 690
+    profiles had the rounds of the one before). The rounds are a function of their inputs
+    alone, so where a build's inputs are bit for bit the last ones, their outcome is the
+    one iterating would give. One entry, copies of both: a few columns of the program.
+    """
+
+    def __init__(self) -> None:
+        self._last: tuple[int, tuple[NDArray, ...], tuple[NDArray, ...]] | None = None
+
+    def get(self, rounds: int, inputs: tuple[NDArray, ...]) -> tuple[NDArray, ...] | None:
+        """Copies of the outcome of the last rounds if they had ``rounds`` and these
+        ``inputs`` bit for bit (NaNs and signed zeros included), else None."""
+        if self._last is None:
+            return None
+        n, kept, out = self._last
+        if n != rounds or not all(_same_bits(a, b) for a, b in zip(inputs, kept, strict=True)):
+            return None
+        return tuple(x.copy() for x in out)
+
+    def put(self, rounds: int, inputs: tuple[NDArray, ...], out: tuple[NDArray, ...]) -> None:
+        """Remember these rounds (copies: the caller keeps using its arrays)."""
+        self._last = (rounds, tuple(x.copy() for x in inputs), tuple(x.copy() for x in out))
+
+
+def _same_bits(a: NDArray, b: NDArray) -> bool:
+    """Whether two arrays have one dtype, one shape and the same bits."""
+    if a.dtype != b.dtype or a.shape != b.shape:
+        return False
+    as_int = np.int64 if a.dtype.itemsize == 8 else np.uint8
+    x = a.view(as_int) if a.dtype.itemsize == 8 else np.ascontiguousarray(a).view(as_int)
+    y = b.view(as_int) if b.dtype.itemsize == 8 else np.ascontiguousarray(b).view(as_int)
+    return bool(np.array_equal(x, y))
+
+
 def build_profile(
     ev: Evaluation,
     *,
@@ -2178,6 +2218,7 @@ def build_profile(
     end_factor: float = 1.0,
     arc_factor: float = 1.0,
     release_directions: bool = False,
+    memo: RoundsMemo | None = None,
 ) -> Profile:
     """The predicted feed profile of an evaluated tool path (see the module docstring).
 
@@ -2194,6 +2235,10 @@ def build_profile(
         Forget the tool path's direction columns once read (:meth:`ToolPath.release_derived`;
         recomputed if asked for again): for a single analysis, 48 bytes a move off the
         peak; not for fits that build many profiles of one path.
+    memo : RoundsMemo, optional
+        The last jerk rounds of the profiles built before (a fit's candidates): where
+        this profile's rounds have the same inputs, their outcome is taken, not iterated
+        again (the same values).
     """
     tp = ev.toolpath
     m = ev.machine
@@ -2268,28 +2313,36 @@ def build_profile(
         free_arcs = None  # (the S-curve ramps keep the shortened holds)
     # The rounds change the accelerations only (see _Rounds); the last one (the rounds' end,
     # or the first whose change is below JERK_CONVERGED) makes the speeds and times.
-    rnd = _Rounds(caps, cap, acc, jerk, holds)
-    a_up, a_dn = rnd.a_up, rnd.a_dn
-    last_round = max(rounds, 1) - 1
+    inputs = (caps, cap, acc, jerk, holds.between)
+    got = memo.get(rounds, inputs) if memo is not None and rounds >= 1 else None
     speeds = None
-    for r in range(max(rounds, 1)):
-        v = rnd.passes()
-        if r == rounds - 1 or not jerk_limited:
-            break
-        if r == last_round:  # rounds < 1: the speeds before the accelerations' update
-            speeds = _moves(v, cap, a_up, a_dn, holds)
-        # Where a move's A_eff turns back (a staircase of falling caps: small steps give a low
-        # A_eff, which holds the speed under the caps, which gives one long ramp and a high
-        # A_eff, ...), _Rounds takes the geometric mean of the last two: the rounds then close
-        # in on the answer between the two states instead of alternating.
-        change = rnd.step(v)
-        del v
-        if change < JERK_CONVERGED:
-            speeds = None
+    if got is not None:  # the same inputs as the last rounds: their outcome
+        v, a_up, a_dn = got
+    else:
+        rnd = _Rounds(caps, cap, acc, jerk, holds)
+        a_up, a_dn = rnd.a_up, rnd.a_dn
+        last_round = max(rounds, 1) - 1
+        for r in range(max(rounds, 1)):
             v = rnd.passes()
-            break
-    del rnd  # the rounds' caches go before the speeds and times are made (1M moves: 50 MB)
-    del b, caps  # (the boundary caps: the passes are done)
+            if r == rounds - 1 or not jerk_limited:
+                break
+            if r == last_round:  # rounds < 1: the speeds before the accelerations' update
+                speeds = _moves(v, cap, a_up, a_dn, holds)
+            # Where a move's A_eff turns back (a staircase of falling caps: small steps give
+            # a low A_eff, which holds the speed under the caps, which gives one long ramp
+            # and a high A_eff, ...), _Rounds takes the geometric mean of the last two: the
+            # rounds then close in on the answer between the two states instead of
+            # alternating.
+            change = rnd.step(v)
+            del v
+            if change < JERK_CONVERGED:
+                speeds = None
+                v = rnd.passes()
+                break
+        del rnd  # the rounds' caches go before the speeds and times are made (1M moves: 50 MB)
+        if memo is not None and rounds >= 1:
+            memo.put(rounds, inputs, (v, a_up, a_dn))
+    del b, caps, inputs  # (the boundary caps: the passes are done)
     if speeds is None:
         speeds = _moves(v, cap, a_up, a_dn, holds)
         sel = np.zeros(0, dtype=np.intp)

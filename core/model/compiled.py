@@ -997,3 +997,48 @@ def sorted_places(s_p: np.ndarray, x: np.ndarray) -> np.ndarray:
         out[i] = at
         k = min(at, n - 1) if n else 0
     return out
+
+
+@kernel
+def first_order(v: np.ndarray, a: float, powers: np.ndarray, inverse: np.ndarray) -> np.ndarray:
+    """core.engine.predict._first_order of an (m, columns) ``v``, element by element: the
+    same blocks of ``powers.size`` rows, in each y_k = a^k (y_0 + sum_{i<=k} (1 - a) x_i /
+    a^i) with the sum running as np.cumsum's (``powers``: a^1..a^block, ``inverse`` the
+    same numbers, the divisors)."""
+    m, cols = v.shape
+    out = np.empty((m, cols))
+    block = powers.size
+    one_minus = 1.0 - a
+    for j in range(cols):
+        y = v[0, j]
+        for c in range(0, m, block):
+            rows = min(block, m - c)
+            run = 0.0
+            for i in range(rows):
+                w = one_minus * v[c + i, j] / inverse[i]
+                run = w if i == 0 else run + w
+                out[c + i, j] = powers[i] * (y + run)
+            y = out[c + rows - 1, j]
+    return out
+
+
+@kernel
+def path_speed(pos: np.ndarray, dt: float) -> np.ndarray:
+    """np.linalg.norm(np.gradient(pos, dt, axis=0), axis=1) of (m, 3) positions (m >= 2)
+    at even steps ``dt``, point by point: central differences inside, one-sided at the
+    ends; the squares summed as numpy's reduction over a row of three sums them."""
+    m = pos.shape[0]
+    out = np.empty(m)
+    two_dt = 2.0 * dt
+    for i in range(m):
+        if i == 0:
+            lo, hi, div = 0, 1, dt
+        elif i == m - 1:
+            lo, hi, div = m - 2, m - 1, dt
+        else:
+            lo, hi, div = i - 1, i + 1, two_dt
+        gx = (pos[hi, 0] - pos[lo, 0]) / div
+        gy = (pos[hi, 1] - pos[lo, 1]) / div
+        gz = (pos[hi, 2] - pos[lo, 2]) / div
+        out[i] = math.sqrt(gx * gx + gy * gy + gz * gz)
+    return out
