@@ -97,6 +97,7 @@ from core.engine.indicators import (
 )
 from core.model import geometry as g
 from core.model.arrays import nan_to_num
+from core.model.jit import compiled
 from core.model.pieces import SPLIT, rows_in_pieces
 from plugins.feed_limit import lowest_axis
 
@@ -272,11 +273,22 @@ def _corner_feed_rows(
     inf = np.inf
     # An axis with no share over the arc sets no limit.
     with np.errstate(divide="ignore", invalid="ignore"):
-        v_feed = np.where(share_t > 0, machine.max_feed / share_t, inf)
         # The normal acceleration may use only a share of A (an effect; 1 in the paper).
         a_n = machine.max_acceleration * machine.normal_acceleration_factor
-        v_acc = np.where(share_n > 0, np.sqrt(a_n * R / share_n), inf)
         v_jerk = np.where(share_t > 0, np.cbrt(machine.max_jerk * R**2 / share_t), inf)
+        kernels = compiled()
+        if kernels is not None:  # the rest row by row, the same operations (core.model.jit)
+            f = np.float64
+            return kernels.corner_limits(
+                np.ascontiguousarray(share_t, dtype=f),
+                np.ascontiguousarray(share_n, dtype=f),
+                np.ascontiguousarray(radius, dtype=f),
+                np.ascontiguousarray(v_jerk, dtype=f),
+                np.ascontiguousarray(machine.max_feed, dtype=f),
+                np.ascontiguousarray(a_n, dtype=f),
+            )
+        v_feed = np.where(share_t > 0, machine.max_feed / share_t, inf)
+        v_acc = np.where(share_n > 0, np.sqrt(a_n * R / share_n), inf)
     # inf jerk times a zero radius is NaN: no radius means a stop.
     cand = np.concatenate([v_feed, v_acc, v_jerk], axis=1)
     nan_to_num(cand, copy=False, nan=0.0, posinf=inf)  # (in place: a new array)

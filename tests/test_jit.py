@@ -256,6 +256,39 @@ def test_filtered_prediction_is_numpys(monkeypatch):
     same(*_both(monkeypatch, motion))
 
 
+def test_corner_limits_are_numpys(monkeypatch):
+    """The corner model's nine limits per corner and the lowest (corner_limits after
+    numpy's cube roots): shares of zero, -0.0 and NaN (no limit), radii of zero and inf
+    (NaN as 0: a stop), machines with and without a jerk limit; and the evaluation of a
+    whole program, bit for bit."""
+    import plugins.tangential as tangential
+
+    rng = np.random.default_rng(8)
+    n = 5000
+    share_t = np.abs(rng.normal(size=(n, 3)))
+    share_n = np.abs(rng.normal(size=(n, 3)))
+    for share in (share_t, share_n):
+        share[rng.random((n, 3)) < 0.2] = 0.0
+        share[rng.random((n, 3)) < 0.02] = -0.0
+        share[rng.random((n, 3)) < 0.01] = np.nan
+    radius = np.abs(rng.normal(0.0, 3.0, n))
+    radius[rng.random(n) < 0.05] = 0.0
+    radius[rng.random(n) < 0.01] = np.inf
+    m = load_preset("siemens-840d")
+    for mm in (m, dataclasses.replace(m, max_jerk=np.full(3, np.inf))):
+        rows = partial(tangential._corner_feed_rows, (share_t, share_n), radius, mm)
+        same(*_both(monkeypatch, rows))
+    nc = Ncperf()
+    tp = nc.extract(str(PROGRAM))
+    plain, fast = _both(monkeypatch, lambda: nc.indicators(tp, m))
+    assert [i.name for i in plain] == [i.name for i in fast]
+    for a, b in zip(plain, fast, strict=True):
+        same((a.index, a.feed, a.limit, a.labels), (b.index, b.feed, b.limit, b.labels))
+        assert sorted(a.values) == sorted(b.values)
+        for key in a.values:
+            same(np.asarray(a.values[key]), np.asarray(b.values[key]))
+
+
 def test_sorted_places_are_searchsorteds():
     """sorted_places (each search from the last one's place) gives np.searchsorted's places:
     sorted and shuffled needles, values equal to the array's (duplicates among them), just

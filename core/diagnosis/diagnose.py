@@ -62,7 +62,7 @@ from core.diagnosis.align import Alignment
 from core.diagnosis.fit import bounded, predict_all
 from core.diagnosis.gaps import GapZone, gap_zones
 from core.diagnosis.objective import FEED, Objective
-from core.diagnosis.parallel import fit_each
+from core.diagnosis.parallel import fit_and_weigh, fit_each
 from core.diagnosis.resample import (
     Data,
     feed_level,
@@ -283,12 +283,13 @@ def diagnose_cases(
     # the effects that act on the rapids are fitted on the calibration rapids too: an axis
     # limit fitted on the feed moves alone may slow the rapids where the trace shows none
     rdata, _ = rapid_data(data)
-    fitted = fit_each(
-        indicators_of, tps, base, effects, data, jobs=jobs, progress=progress, rapids=rdata
-    )
-    results = _evidence(
-        effects, base, fitted, before, g_before, data, lambda preds: rapid_gap(preds, data)
-    )
+    weigh = _weigher(effects, base, before, g_before, data, lambda preds: rapid_gap(preds, data))
+    fitted, results = _fitted_and_weighed(
+        fit_and_weigh(
+            indicators_of, tps, base, effects, data, weigh, jobs=jobs, progress=progress,
+            rapids=rdata,
+        )
+    )  # fmt: skip
     floor, floor_source = noise_floor(base, data)
     # effects whose values the machine file sets (absolute, not a further factor on top)
     folded = frozenset(
@@ -509,16 +510,13 @@ def _on_rapids(
     if progress is not None:
         progress("the feed moves show no effect: fitting the axes' limits on the rapids")
     g_feed = gap(before, data, "held_out")
-    fitted = fit_each(indicators_of, tps, base, on, rdata, jobs=jobs, progress=progress)
     # (``rapid_gap`` here: the feed moves' held-out gap, which these fits did not see)
-    results = _evidence(
-        on,
-        base,
-        fitted,
-        before,
-        gap(before, rdata, "held_out"),
-        rdata,
+    weigh = _weigher(
+        on, base, before, gap(before, rdata, "held_out"), rdata,
         lambda preds: gap(preds, data, "held_out"),
+    )  # fmt: skip
+    fitted, results = _fitted_and_weighed(
+        fit_and_weigh(indicators_of, tps, base, on, rdata, weigh, jobs=jobs, progress=progress)
     )
     floor_r, _ = noise_floor(base, rdata)
     contradicted = frozenset(r.name for r in results if r.rapid_gap - g_feed > floor)
@@ -678,30 +676,54 @@ def _evidence(
     data: Sequence[Data],
     unseen: Callable[[list[Prediction]], float],
 ) -> list[EffectResult]:
-    """Every fitted effect's evidence on ``data`` (whose held-out gap before is
-    ``g_before``): its held-out and calibration gaps, the parameters it moved, the p value
-    of its held-out reduction against ``before`` and its squared gap per held-out piece,
-    and, as ``rapid_gap``, ``unseen`` of its predictions: its gap on what the decision
-    weighs beside -- the rapids on the feed moves, the feed moves on the rapids."""
+    """Every fitted effect's evidence on ``data`` (:func:`_weigher`)."""
+    weigh = _weigher(effects, base, before, g_before, data, unseen)
+    return [weigh(name, f) for name, f in fitted.items()]
+
+
+def _weigher(
+    effects: Mapping[str, Effect],
+    base: Setup,
+    before: Sequence[Prediction],
+    g_before: float,
+    data: Sequence[Data],
+    unseen: Callable[[list[Prediction]], float],
+) -> Callable[[str, tuple[dict[str, float], list[Prediction]]], EffectResult]:
+    """What a fitted effect's evidence on ``data`` (whose held-out gap before is
+    ``g_before``) is made by: its held-out and calibration gaps, the parameters it moved,
+    the p value of its held-out reduction against ``before`` and its squared gap per
+    held-out piece, and, as ``rapid_gap``, ``unseen`` of its predictions: its gap on what
+    the decision weighs beside -- the rapids on the feed moves, the feed moves on the
+    rapids. (A function of the fit alone: the fits' workers weigh their own,
+    :func:`core.diagnosis.parallel.fit_and_weigh`.)"""
     sq_before, _ = held_out_chunks(before, data)
-    out = []
-    for name, (params, preds) in fitted.items():
+
+    def weigh(name: str, fitted: tuple[dict[str, float], list[Prediction]]) -> EffectResult:
+        params, preds = fitted
         speeds = held_out_speeds(preds, data)
         sq_after, _ = held_out_chunks(preds, data, speeds)
-        out.append(
-            EffectResult(
-                name,
-                params,
-                g_before,
-                gap(preds, data, "held_out", speeds),
-                gap(preds, data, "calibration"),
-                moved=_moved(effects[name], params, effects[name].start(base.machine)),
-                p=sign_flip_p(sq_before, sq_after),
-                chunk_sq=sq_after,
-                rapid_gap=unseen(preds),
-            )
+        return EffectResult(
+            name,
+            params,
+            g_before,
+            gap(preds, data, "held_out", speeds),
+            gap(preds, data, "calibration"),
+            moved=_moved(effects[name], params, effects[name].start(base.machine)),
+            p=sign_flip_p(sq_before, sq_after),
+            chunk_sq=sq_after,
+            rapid_gap=unseen(preds),
         )
-    return out
+
+    return weigh
+
+
+def _fitted_and_weighed(
+    both: Mapping[str, tuple[tuple[dict[str, float], list[Prediction]], EffectResult | None]],
+) -> tuple[dict[str, tuple[dict[str, float], list[Prediction]]], list[EffectResult]]:
+    """:func:`core.diagnosis.parallel.fit_and_weigh`'s fits and their evidence apart."""
+    results = [r for _, r in both.values()]
+    assert all(r is not None for r in results)
+    return {name: f for name, (f, _) in both.items()}, [r for r in results if r is not None]
 
 
 def _idle(

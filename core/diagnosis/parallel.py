@@ -11,7 +11,7 @@ effects' order, the same to the bit as one after the other.
 from __future__ import annotations
 
 from collections.abc import Callable, Mapping, Sequence
-from typing import Any
+from typing import Any, TypeVar
 
 from core.diagnosis.fit import fit, scores_planned
 from core.diagnosis.objective import FEED, Objective
@@ -23,6 +23,8 @@ from core.model.workers import forked_map, workers_for
 
 #: What one fit gives: the parameters and the predictions of every program with them.
 Fitted = tuple[dict[str, float], list[Prediction]]
+#: What :func:`fit_and_weigh`'s ``weigh`` makes of a fit.
+W = TypeVar("W")
 
 #: Progress lines of :func:`fit_each` (``name``: the effect, ``k`` of ``n``): as a fit starts
 #: (one after the other); as the fits start on ``workers`` processes, and as each is done
@@ -76,6 +78,46 @@ def fit_each(
     as on the feed moves. ``progress``, if given, is told ``step`` as each fit
     starts (one after the other), or ``start`` once and ``done`` as each fit ends (on
     workers), formatted with the effect's ``name``, ``k`` and ``n`` and the ``workers``."""
+    both = fit_and_weigh(
+        indicators_of,
+        tps,
+        base,
+        effects,
+        data,
+        None,
+        objective,
+        jobs=jobs,
+        progress=progress,
+        step=step,
+        start=start,
+        done=done,
+        rapids=rapids,
+    )
+    return {name: fitted for name, (fitted, _) in both.items()}
+
+
+def fit_and_weigh(
+    indicators_of: IndicatorSource,
+    tps: Sequence[ToolPath],
+    base: Setup,
+    effects: Mapping[str, Effect],
+    data: Sequence[Any],
+    weigh: Callable[[str, Fitted], W] | None,
+    objective: Objective = FEED,
+    *,
+    jobs: int = 1,
+    progress: Callable[[str], None] | None = None,
+    step: str = STEP,
+    start: str = START,
+    done: str = DONE,
+    rapids: Sequence[Any] = (),
+) -> dict[str, tuple[Fitted, W | None]]:
+    """:func:`fit_each`, each fit then weighed where it was made: {name: ((params,
+    predictions), weigh(name, (params, predictions)))} (None without ``weigh``) -- the
+    evidence of every fit (its held-out gaps, its test) made on the workers beside the
+    fits rather than one after the other once they are all back. ``weigh`` must give
+    what it would give in this process (a function of the fit and of what the workers
+    inherit)."""
     say = progress or (lambda _: None)
     names = list(effects)
     with_rapids = [*data, *rapids]
@@ -83,17 +125,19 @@ def fit_each(
     def data_of(name: str) -> Sequence[Any]:
         return with_rapids if rapids and effects[name].rapids else data
 
+    def one(k: int) -> tuple[Fitted, W | None]:
+        name = names[k]
+        fitted = fit(indicators_of, tps, base, effects[name], data_of(name), objective)
+        return fitted, None if weigh is None else weigh(name, fitted)
+
     n = len(names)
     workers = workers_for(jobs, n)
     if workers == 1:
         out = {}
         for k, name in enumerate(names, start=1):
             say(step.format(name=name, k=k, n=n))
-            out[name] = fit(indicators_of, tps, base, effects[name], data_of(name), objective)
+            out[name] = one(k - 1)
         return out
-
-    def one(k: int) -> Fitted:
-        return fit(indicators_of, tps, base, effects[names[k]], data_of(names[k]), objective)
 
     say(start.format(n=n, workers=workers))
     costs = [cost(effects[name], base) for name in names]

@@ -1042,3 +1042,44 @@ def path_speed(pos: np.ndarray, dt: float) -> np.ndarray:
         gz = (pos[hi, 2] - pos[lo, 2]) / div
         out[i] = math.sqrt(gx * gx + gy * gy + gz * gz)
     return out
+
+
+@kernel
+def corner_limits(
+    share_t: np.ndarray,
+    share_n: np.ndarray,
+    radius: np.ndarray,
+    v_jerk: np.ndarray,
+    max_feed: np.ndarray,
+    a_n: np.ndarray,
+) -> tuple[np.ndarray, np.ndarray]:
+    """plugins.tangential._corner_feed_rows after its jerk column ``v_jerk`` ((m, 3):
+    numpy's cube roots, which may be SIMD code of its own): each corner's feed limits of
+    the axes' speeds (max_feed / share_t), normal accelerations (sqrt(a_n R / share_n))
+    and jerks, inf where an axis has no share, NaN as 0 and -inf as the lowest double
+    (np.nan_to_num), and the lowest of the nine with the first of equals (np.argmin)."""
+    m = radius.size
+    feed = np.empty(m)
+    limit = np.empty(m, dtype=np.int64)
+    lowest = -1.7976931348623157e308
+    for i in range(m):
+        best = 0.0
+        at = 0
+        for c in range(9):
+            j = c % 3
+            if c < 3:
+                x = max_feed[j] / share_t[i, j] if share_t[i, j] > 0 else np.inf
+            elif c < 6:
+                x = math.sqrt(a_n[j] * radius[i] / share_n[i, j]) if share_n[i, j] > 0 else np.inf
+            else:
+                x = v_jerk[i, j]
+            if math.isnan(x):
+                x = 0.0
+            elif x == -np.inf:
+                x = lowest
+            if c == 0 or x < best:
+                best = x
+                at = c
+        feed[i] = best
+        limit[i] = at
+    return feed, limit
