@@ -97,7 +97,7 @@ from core.engine.indicators import (
 )
 from core.model import geometry as g
 from core.model.arrays import nan_to_num
-from core.model.jit import compiled
+from core.model.native import kernels as corner_kernels
 from core.model.pieces import SPLIT, rows_in_pieces
 from plugins.feed_limit import lowest_axis
 
@@ -276,8 +276,8 @@ def _corner_feed_rows(
         # The normal acceleration may use only a share of A (an effect; 1 in the paper).
         a_n = machine.max_acceleration * machine.normal_acceleration_factor
         v_jerk = np.where(share_t > 0, np.cbrt(machine.max_jerk * R**2 / share_t), inf)
-        kernels = compiled()
-        if kernels is not None:  # the rest row by row, the same operations (core.model.jit)
+        kernels = corner_kernels()
+        if kernels is not None:  # the rest row by row, the same operations (numba's or C)
             f = np.float64
             return kernels.corner_limits(
                 np.ascontiguousarray(share_t, dtype=f),

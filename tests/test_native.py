@@ -244,6 +244,36 @@ def test_stellabee1_profile_is_numpys(monkeypatch):
     _profiles_same(*_numpy_then_c(monkeypatch, lambda: build_profile(ev)))
 
 
+def test_corner_limits_are_numpys(monkeypatch):
+    """The corner model's nine limits per corner and the lowest (corner_limits after
+    numpy's cube roots): shares of zero, -0.0, NaN, inf and tiny (no limit, or limits of
+    every size), radii of zero, inf and NaN, machines with and without a jerk limit; and
+    the corner model of stellabee1 (two threads), bit for bit."""
+    from plugins import tangential
+
+    rng = np.random.default_rng(4)
+    n = 6000
+    share_t = np.abs(_tricky(rng, 3 * n, 0.0, 1.0, 0.3)).reshape(n, 3)
+    share_n = _tricky(rng, 3 * n, 0.0, 1.0, 0.3).reshape(n, 3)
+    radius = _tricky(rng, n, 0.0, 5.0, 0.1)
+    m = load_preset("siemens-840d")
+    for mm in (m, dataclasses.replace(m, max_jerk=np.full(3, np.inf))):
+        rows = lambda mm=mm: tangential._corner_feed_rows((share_t, share_n), radius, mm)  # noqa: E731
+        same(*_numpy_then_c(monkeypatch, rows))
+    program = shared("data", "gcode", "linuxcnc-tp-tests", "stellabee1.ngc")
+    nc = Ncperf()
+    tp = nc.extract(str(program))
+
+    def corners() -> list:
+        inds = tangential.ncperf_evaluate(toolpath=tp, machine=m)
+        return [
+            (i.name, i.index, i.feed, i.limit, *(i.values[k] for k in sorted(i.values)))
+            for i in inds
+        ]
+
+    same(*_numpy_then_c(monkeypatch, corners))
+
+
 def test_no_jit_switch_keeps_numpy(monkeypatch):
     monkeypatch.setenv(NO_JIT_ENV, "1")
     assert nat.native() is None

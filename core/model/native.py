@@ -31,7 +31,7 @@ from core.model.pieces import SPLIT, side_by_side, two_cores
 
 #: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
 #: another version of the source is not loaded.
-VERSION = 5
+VERSION = 6
 
 _P = ctypes.c_void_p
 _I = ctypes.c_int64
@@ -61,6 +61,8 @@ class Kernels:
         lib.passes_backward.restype = None
         lib.passes_join.argtypes = [_I, _I, *[_P] * 3]
         lib.passes_join.restype = None
+        lib.corner_limits.argtypes = [_I, _I, *[_P] * 8]
+        lib.corner_limits.restype = None
 
     def marks(
         self,
@@ -152,6 +154,33 @@ class Kernels:
             *((None, None) if fixed is None else (_ptr(fixed[0], f), _ptr(fixed[1], f))),
         )  # fmt: skip
         return change.value, bool(fin.value), behind[:count].copy(), wanted[:count].copy()
+
+    def corner_limits(
+        self,
+        share_t: NDArray,
+        share_n: NDArray,
+        radius: NDArray,
+        v_jerk: NDArray,
+        max_feed: NDArray,
+        a_n: NDArray,
+    ) -> tuple[NDArray, NDArray]:
+        """plugins.tangential._corner_feed_rows after its jerk column: as
+        :func:`core.model.compiled.corner_limits` (each corner's lowest limit and which of
+        the nine it is)."""
+        f = np.float64
+        m = radius.size
+        if not (share_t.shape == share_n.shape == v_jerk.shape == (m, 3)) or not (
+            max_feed.size == a_n.size == 3
+        ):
+            raise ValueError("C kernel corner_limits: columns of different shapes")
+        feed = np.empty(m)
+        limit = np.empty(m, dtype=np.int64)
+        if m:
+            self.lib.corner_limits(
+                0, m, _ptr(share_t, f), _ptr(share_n, f), _ptr(radius, f), _ptr(v_jerk, f),
+                _ptr(max_feed, f), _ptr(a_n, f), _ptr(feed, f), _ptr(limit, np.int64),
+            )  # fmt: skip
+        return feed, limit
 
     def plain_passes(
         self, b2: NDArray, up: NDArray, dn: NDArray, w: NDArray, bwd: NDArray, out: NDArray
