@@ -374,3 +374,40 @@ def test_diagnose_command_jobs(tmp_path, capsys):
         err = capsys.readouterr().err
         assert err == f"ncperf: --jobs must be 1 or more worker processes, got {bad}\n"
         assert not (tmp_path / "x.json").exists()
+
+
+def test_a_prediction_sent_back_keeps_its_motion_not_its_plans():
+    """What a worker sends back of a fit (Prediction.unshared): the prediction's own
+    filtered motion, not what the predictions of its plan share (the unfiltered signal,
+    the other setups' filtered motions); pickled and read back, the same speeds, commanded
+    and not, and the same signal -- its motion not made again."""
+    import pickle
+
+    import core.engine.predict as predict_module
+    from core.engine.predict import predict, retimed
+
+    nc = Ncperf(make_plugin_manager(entry_points=False))
+    tp = zigzag()
+    base = Setup(machine=machine(jerk=(INF, INF, INF)))
+    first = predict(nc.indicators, tp, base.replace(servo_tau=0.01))
+    pred = retimed(first, base.replace(servo_tau=0.02, filter_window=0.004))
+    s = np.linspace(0.0, tp.end_s[-1], 3001)
+    want = (pred.speed_at(s), pred.speed_at(s, commanded=True), *pred.signal())
+    first.speed_at(s)  # (a second filtered motion in the plan's shared cache)
+    assert len(pred.shared["filtered"]) == 2
+    sent = pickle.loads(pickle.dumps(pred.unshared()))
+    assert sent.shared == {}
+    made = []
+    real = predict_module._first_order
+    predict_module._first_order = lambda *a: made.append(1) or real(*a)
+    try:
+        got = (sent.speed_at(s), sent.speed_at(s, commanded=True), *sent.signal())
+    finally:
+        predict_module._first_order = real
+    assert not made
+    assert _bits(got) == _bits(want)
+    # what stays behind: at least the unfiltered signal and the other filtered motion
+    left = sum(a.nbytes for a in pred.shared["raw"])
+    (other,) = [f for f in pred.shared["filtered"].values() if f is not pred._filtered]
+    left += sum(a.nbytes for a in other)
+    assert len(pickle.dumps(pred)) - len(pickle.dumps(pred.unshared())) >= left

@@ -139,10 +139,15 @@ def fit_and_weigh(
             out[name] = one(k - 1)
         return out
 
+    def sent(k: int) -> tuple[Fitted, W | None]:
+        (params, preds), weighed = one(k)
+        # (what the plans share stays: 50 MB a fit of a servo lag, not read by the parent)
+        return (params, [p.unshared() for p in preds]), weighed
+
     say(start.format(n=n, workers=workers))
     costs = [cost(effects[name], base) for name in names]
     fitted = forked_map(
-        one,
+        sent,
         n,
         workers,
         # the longest fits first, so that none starts last (ties: those fitted on the rapids

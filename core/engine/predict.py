@@ -196,6 +196,17 @@ class Prediction:
             del kept[next(iter(kept))]  # the oldest
         return out
 
+    def unshared(self) -> Prediction:
+        """This prediction without what the predictions of its plan share (the unfiltered
+        signal, the filtered motions of other setups: 50 MB a fit of a servo lag on the
+        diagnose benchmark), its own filtered motion kept: the same speeds and signal, for
+        sending to another process. Whatever else is asked of it is made again, the
+        same."""
+        out = dataclasses.replace(self, shared={})
+        if "_filtered" in self.__dict__:  # (cached_property's place)
+            out.__dict__["_filtered"] = self.__dict__["_filtered"]
+        return out
+
     def signal(self, *, raw: bool = False) -> tuple[NDArray, NDArray, NDArray]:
         """(t, s, v) of the predicted motion sampled in time (s, mm, mm/s)."""
         if not raw and self._filtered is not None:
