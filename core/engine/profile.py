@@ -1512,7 +1512,7 @@ class _Rounds:
             extra = {"fixed": self.fixed} if isinstance(kernels, Kernels) else {}
             change, finite, at, want = kernels.dense_round(
                 rising, phase, through, v0, v1, peak, a, last, term, off, acc, jerk,
-                between, step, moved, CACHE_PIECE, TOL.nil_speed, finite, **extra,
+                between, step, moved, TOL.nil_speed, finite, **extra,
             )  # fmt: skip
             self._keep_round(rising, step, moved, (at, want))
             return float(change), bool(finite)

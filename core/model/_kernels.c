@@ -45,7 +45,7 @@ static inline double vmin(double a, double b) {
 
 /* The version of this interface: core/model/native.py loads a library of its own
    version only (a stale build beside newer Python code is not used). */
-EXPORT int64_t ncperf_kernels_version(void) { return 6; }
+EXPORT int64_t ncperf_kernels_version(void) { return 7; }
 
 /* core.engine.profile._Rounds._all_marks (every != 0: the moves first..first+count-1) or
    _marks_of of the moves at[first..first+count-1] (two threads take a half each): each move's peak, whether it accelerates (rise) or brakes
@@ -91,28 +91,19 @@ static inline double upper_of(int rising, int64_t k, const uint8_t *through, con
     return through[k + 1] ? (rising ? v1[k] : v0[k]) : peak[k];
 }
 
-/* core.engine.profile._chain_dv into dv, with the work array cont (n + 1). */
+/* core.engine.profile._chain_dv into dv, in one pass: each run of moves where a move
+   continues the chain of the one before (rising: it accelerates through its start,
+   through[k] and phase[k]; falling: it and the one before brake, through[k + 1]) gets the
+   speed change from the chain's first move to its last; a move alone its own. */
 static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t *through,
-                     const double *v0, const double *v1, const double *peak, uint8_t *cont,
-                     double *dv) {
-    cont[0] = 0;
-    cont[n] = 0;
-    for (int64_t k = 0; k < n; k++) {
-        if (rising)
-            cont[k] = through[k] && phase[k];
-        else if (k > 0)
-            cont[k] = through[k + 1] && phase[k] && phase[k - 1];
-    }
-    for (int64_t k = 0; k < n; k++)
-        dv[k] = upper_of(rising, k, through, v0, v1, peak) - (rising ? v0[k] : v1[k]);
+                     const double *v0, const double *v1, const double *peak, double *dv) {
     int64_t k = 0;
     while (k < n) {
-        if (!(cont[k] || cont[k + 1])) {
-            k++;
-            continue;
-        }
-        int64_t first = k; /* a chain of several moves: to the first without cont[k + 1] */
-        while (cont[k + 1]) k++;
+        int64_t first = k;
+        if (rising)
+            while (k + 1 < n && through[k + 1] && phase[k + 1]) k++;
+        else
+            while (k + 1 < n && through[k + 2] && phase[k + 1] && phase[k]) k++;
         int64_t last = k;
         double hi = rising ? upper_of(rising, last, through, v0, v1, peak) - v0[first]
                            : upper_of(rising, first, through, v0, v1, peak) - v1[last];
@@ -125,63 +116,55 @@ static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t 
    term (the passes' terms) updated in place, this round's step and moved written; the
    largest relative change into *change, whether the terms are still plain into *finite;
    the moves the damping held back into behind, their targets into wanted (n each at
-   most): returns how many. Pieces of `piece` moves as there: a piece where no
-   acceleration moves keeps its off and term untouched. work: n + piece doubles (the ramps'
-   speed changes, a piece's new accelerations), cont: n + 1;
-   aj and lim (or NULL): acc / jerk and acc * acc / jerk, which do not change from round to
+   most): returns how many. numpy's code writes off and term again over every piece of
+   moves where one moved; here only the moves that moved are written: the others' are the
+   same values already (off is a != acc and term the pass term of a wherever they are
+   made, and each term was checked for finite when it was made). work: n doubles (the
+   ramps' speed changes); aj and lim (or NULL): acc / jerk and acc * acc / jerk, which do not change from round to
    round (the same quotients, made once by numpy). */
 EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const uint8_t *through,
                            const double *v0, const double *v1, const double *peak, double *a,
                            const int8_t *last, double *term, uint8_t *off, const double *acc,
                            const double *jerk, const double *between, int8_t *step,
-                           uint8_t *moved, int64_t piece, double nil_speed, int *finite,
-                           double *change, int64_t *behind, double *wanted, double *work,
-                           uint8_t *cont, const double *aj, const double *lim) {
-    double *dv = work, *out = work + n; /* (out: the piece's, out[k - start]) */
-    chain_dv(rising, n, phase, through, v0, v1, peak, cont, dv);
+                           uint8_t *moved, double nil_speed, int *finite, double *change,
+                           int64_t *behind, double *wanted, double *work, const double *aj,
+                           const double *lim) {
+    double *dv = work;
+    chain_dv(rising, n, phase, through, v0, v1, peak, dv);
     int64_t n_behind = 0;
     double ch = 0.0;
     int fin = *finite;
-    for (int64_t start = 0; start < n; start += piece) {
-        int64_t stop = start + piece < n ? start + piece : n;
-        int any_moved = 0;
-        for (int64_t k = start; k < stop; k++) {
-            double od = a[k];
-            /* effective_acceleration(dv, acc, jerk, only=phase) */
-            double d = dv[k], ak = acc[k], jk = jerk[k];
-            double nw = ak;
-            if (isfinite(jk) && d > nil_speed && phase[k]) {
-                double t_full = d / ak + (aj ? aj[k] : ak / jk);
-                double t_short = sqrt(d / jk) * 2.0;
-                double t = d >= (lim ? lim[k] : ak * ak / jk) ? t_full : t_short;
-                nw = d / t;
-            }
-            /* the damping: the geometric mean where the step turns back */
-            int8_t ls = last[k];
-            double o = nw;
-            if ((nw > od && ls < 0) || (nw < od && ls > 0)) {
-                o = sqrt(od * nw);
-                if (o != nw) {
-                    behind[n_behind] = k;
-                    wanted[n_behind] = nw;
-                    n_behind++;
-                }
-            }
-            out[k - start] = o;
-            step[k] = (int8_t)((o > od ? 1 : 0) - (o < od ? 1 : 0));
-            if (o != od) { /* (where o == od, o / od - 1 is 0 or NaN: no change either way) */
-                double rel = fabs(o / od - 1.0);
-                if (rel > ch) ch = rel; /* (NaN skipped, as nanmax) */
-            }
-            uint8_t mv = o != od;
-            moved[k] = mv;
-            any_moved = any_moved || mv;
+    for (int64_t k = 0; k < n; k++) {
+        double od = a[k];
+        /* effective_acceleration(dv, acc, jerk, only=phase) */
+        double d = dv[k], ak = acc[k], jk = jerk[k];
+        double nw = ak;
+        if (isfinite(jk) && d > nil_speed && phase[k]) {
+            double t_full = d / ak + (aj ? aj[k] : ak / jk);
+            double t_short = sqrt(d / jk) * 2.0;
+            double t = d >= (lim ? lim[k] : ak * ak / jk) ? t_full : t_short;
+            nw = d / t;
         }
-        if (!any_moved) continue;
-        for (int64_t k = start; k < stop; k++) {
-            if (moved[k]) a[k] = out[k - start];
-            off[k] = a[k] != acc[k];
-            double tm = a[k] * vmax(between[k], 0.0) * 2.0;
+        /* the damping: the geometric mean where the step turns back */
+        int8_t ls = last[k];
+        double o = nw;
+        if ((nw > od && ls < 0) || (nw < od && ls > 0)) {
+            o = sqrt(od * nw);
+            if (o != nw) {
+                behind[n_behind] = k;
+                wanted[n_behind] = nw;
+                n_behind++;
+            }
+        }
+        step[k] = (int8_t)((o > od ? 1 : 0) - (o < od ? 1 : 0));
+        uint8_t mv = o != od;
+        moved[k] = mv;
+        if (mv) { /* (where o == od, o / od - 1 is 0 or NaN: no change either way) */
+            double rel = fabs(o / od - 1.0);
+            if (rel > ch) ch = rel; /* (NaN skipped, as nanmax) */
+            a[k] = o;
+            off[k] = o != acc[k];
+            double tm = o * vmax(between[k], 0.0) * 2.0;
             term[k] = tm;
             if (!(isfinite(tm) && !(tm < 0.0))) fin = 0;
         }

@@ -507,35 +507,26 @@ def chain_dv(
     v1: np.ndarray,
     peak: np.ndarray,
 ) -> np.ndarray:
-    """core.engine.profile._chain_dv, move by move."""
+    """core.engine.profile._chain_dv, move by move, in one pass: each run of moves where a
+    move continues the chain of the one before (rising: it accelerates through its start,
+    through[k] and phase[k]; falling: it and the one before brake, through[k + 1]) gets
+    the speed change from the chain's first move to its last; a move alone its own."""
     n = phase.size
-    cont = np.zeros(n + 1, dtype=np.bool_)
-    for k in range(n):
-        if rising:
-            cont[k] = through[k] and phase[k]
-        elif k > 0:
-            cont[k] = through[k + 1] and phase[k] and phase[k - 1]
-    upper = np.empty(n)
     dv = np.empty(n)
-    for k in range(n):
-        if through[k + 1]:
-            upper[k] = v1[k] if rising else v0[k]
-        else:
-            upper[k] = peak[k]
-        dv[k] = upper[k] - (v0[k] if rising else v1[k])
     k = 0
     while k < n:
-        if not (cont[k] or cont[k + 1]):
-            k += 1
-            continue
-        first = k  # a chain of several moves: from here to the first without cont[k + 1]
-        while cont[k + 1]:
-            k += 1
+        first = k
+        if rising:
+            while k + 1 < n and through[k + 1] and phase[k + 1]:
+                k += 1
+        else:
+            while k + 1 < n and through[k + 2] and phase[k + 1] and phase[k]:
+                k += 1
         last = k
         if rising:
-            hi = upper[last] - v0[first]
+            hi = (v1[last] if through[last + 1] else peak[last]) - v0[first]
         else:
-            hi = upper[first] - v1[last]
+            hi = (v0[first] if through[first + 1] else peak[first]) - v1[last]
         for m in range(first, last + 1):
             dv[m] = hi
         k += 1
@@ -559,60 +550,52 @@ def dense_round(
     between: np.ndarray,
     step: np.ndarray,
     moved: np.ndarray,
-    piece: int,
     nil_speed: float,
     finite: bool,
 ) -> tuple[float, bool, np.ndarray, np.ndarray]:
     """core.engine.profile._Rounds._dense, move by move: the accelerations ``a`` and their
     ``off``, ``term`` updated in place, this round's ``step`` and ``moved`` written; returns
     the largest relative change, whether the terms are still plain, and the moves the
-    damping held back with their targets. The pieces of ``piece`` moves as there: a piece
-    where no acceleration moves keeps its ``off`` and ``term`` untouched."""
+    damping held back with their targets. numpy's code writes ``off`` and ``term`` again
+    over every piece of moves where one moved; here only the moves that moved are written:
+    the others' are the same values already (``off`` is a != acc and ``term`` the pass
+    term of ``a`` wherever they are made, and each term was checked for ``finite`` when it
+    was made)."""
     n = a.size
     dv = chain_dv(rising, phase, through, v0, v1, peak)
-    out = np.empty(n)
     behind = np.empty(n, dtype=np.int64)
     wanted = np.empty(n)
     n_behind = 0
     change = 0.0
-    for start in range(0, n, piece):
-        stop = min(start + piece, n)
-        any_moved = False
-        for k in range(start, stop):
-            od = a[k]
-            # effective_acceleration(dv, acc, jerk, only=phase)
-            d, ak, jk = dv[k], acc[k], jerk[k]
-            new = ak  # (the quotients only where they are kept)
-            if math.isfinite(jk) and d > nil_speed and phase[k]:
-                t_full = d / ak + ak / jk
-                t_short = math.sqrt(d / jk) * 2.0
-                t = t_full if d >= ak * ak / jk else t_short
-                new = d / t
-            # the damping
-            ls = last[k]
-            o = new
-            if (new > od and ls < 0) or (new < od and ls > 0):
-                o = math.sqrt(od * new)
-                if o != new:
-                    behind[n_behind] = k
-                    wanted[n_behind] = new
-                    n_behind += 1
-            out[k] = o
-            step[k] = (1 if o > od else 0) - (1 if o < od else 0)
-            if o != od:  # (where o == od, o / od - 1 is 0 or NaN: no change either way)
-                rel = abs(o / od - 1.0)
-                if rel > change:  # (NaN skipped, as nanmax)
-                    change = rel
-            mv = o != od
-            moved[k] = mv
-            any_moved = any_moved or mv
-        if not any_moved:
-            continue
-        for k in range(start, stop):
-            if moved[k]:
-                a[k] = out[k]
-            off[k] = a[k] != acc[k]
-            tm = a[k] * vmax(between[k], 0.0) * 2.0
+    for k in range(n):
+        od = a[k]
+        # effective_acceleration(dv, acc, jerk, only=phase)
+        d, ak, jk = dv[k], acc[k], jerk[k]
+        new = ak  # (the quotients only where they are kept)
+        if math.isfinite(jk) and d > nil_speed and phase[k]:
+            t_full = d / ak + ak / jk
+            t_short = math.sqrt(d / jk) * 2.0
+            t = t_full if d >= ak * ak / jk else t_short
+            new = d / t
+        # the damping
+        ls = last[k]
+        o = new
+        if (new > od and ls < 0) or (new < od and ls > 0):
+            o = math.sqrt(od * new)
+            if o != new:
+                behind[n_behind] = k
+                wanted[n_behind] = new
+                n_behind += 1
+        step[k] = (1 if o > od else 0) - (1 if o < od else 0)
+        mv = o != od
+        moved[k] = mv
+        if mv:  # (where o == od, o / od - 1 is 0 or NaN: no change either way)
+            rel = abs(o / od - 1.0)
+            if rel > change:  # (NaN skipped, as nanmax)
+                change = rel
+            a[k] = o
+            off[k] = o != acc[k]
+            tm = o * vmax(between[k], 0.0) * 2.0
             term[k] = tm
             if not (math.isfinite(tm) and not tm < 0.0):
                 finite = False

@@ -31,7 +31,7 @@ from core.model.pieces import SPLIT, side_by_side, two_cores
 
 #: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
 #: another version of the source is not loaded.
-VERSION = 6
+VERSION = 7
 
 _P = ctypes.c_void_p
 _I = ctypes.c_int64
@@ -53,7 +53,7 @@ class Kernels:
         self.lib = lib
         lib.marks.argtypes = [_P, _I, _I, ctypes.c_int, *[_P] * 5, _D, _D, *[_P] * 5]
         lib.marks.restype = None
-        lib.dense_round.argtypes = [ctypes.c_int, _I, *[_P] * 14, _I, _D, *[_P] * 8]
+        lib.dense_round.argtypes = [ctypes.c_int, _I, *[_P] * 14, _D, *[_P] * 7]
         lib.dense_round.restype = _I
         lib.passes_forward.argtypes = [_I, *[_P] * 4]
         lib.passes_forward.restype = None
@@ -121,7 +121,6 @@ class Kernels:
         between: NDArray,
         step: NDArray,
         moved: NDArray,
-        piece: int,
         nil_speed: float,
         finite: bool,
         fixed: tuple[NDArray, NDArray] | None = None,
@@ -135,22 +134,21 @@ class Kernels:
         n = a.size
         cols = [phase, v0, v1, peak, last, term, off, acc, jerk, between, step, moved]
         cols += [] if fixed is None else list(fixed)
-        if through.size != n + 1 or any(c.size != n for c in cols) or piece < 1:
+        if through.size != n + 1 or any(c.size != n for c in cols):
             raise ValueError("C kernel dense_round: columns of different lengths")
         # (behind and wanted: pages the kernel does not write are never resident)
         behind = np.empty(n, dtype=np.intp)
         wanted = np.empty(n)
-        work = np.empty(n + piece)
-        cont = np.empty(n + 1, dtype=np.bool_)
+        work = np.empty(n)
         fin = ctypes.c_int(int(finite))
         change = ctypes.c_double(0.0)
         count = self.lib.dense_round(
             int(rising), n, _ptr(phase, b), _ptr(through, b),
             _ptr(v0, f), _ptr(v1, f), _ptr(peak, f), _ptr(a, f), _ptr(last, np.int8),
             _ptr(term, f), _ptr(off, b), _ptr(acc, f), _ptr(jerk, f), _ptr(between, f),
-            _ptr(step, np.int8), _ptr(moved, b), piece, nil_speed,
+            _ptr(step, np.int8), _ptr(moved, b), nil_speed,
             ctypes.addressof(fin), ctypes.addressof(change),
-            _ptr(behind, np.intp), _ptr(wanted, f), _ptr(work, f), _ptr(cont, b),
+            _ptr(behind, np.intp), _ptr(wanted, f), _ptr(work, f),
             *((None, None) if fixed is None else (_ptr(fixed[0], f), _ptr(fixed[1], f))),
         )  # fmt: skip
         return change.value, bool(fin.value), behind[:count].copy(), wanted[:count].copy()
