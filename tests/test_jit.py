@@ -289,6 +289,22 @@ def test_corner_limits_are_numpys(monkeypatch):
             same(np.asarray(a.values[key]), np.asarray(b.values[key]))
 
 
+def test_changed_moves_are_numpys(monkeypatch):
+    """The moves where any of a profile's per-move values changed (the diagnosis's reuse
+    of a recent candidate's speeds): (old != new).any(axis=0), one column at a time."""
+    from core.diagnosis.resample import _changed_moves
+
+    rng = np.random.default_rng(9)
+    for rows, n in ((1, 1), (9, 7000), (15, 301)):
+        old = rng.integers(-5, 5, (rows, n))
+        new = old.copy()
+        hit = rng.random((rows, n)) < 0.05
+        new[hit] += 1
+        got = _both(monkeypatch, partial(_changed_moves, old, new))
+        same(*got)
+        np.testing.assert_array_equal(got[1], hit.any(axis=0))
+
+
 def test_sorted_places_are_searchsorteds():
     """sorted_places (each search from the last one's place) gives np.searchsorted's places:
     sorted and shuffled needles, values equal to the array's (duplicates among them), just

@@ -37,6 +37,7 @@ from core.diagnosis.rules import (
     TIME_FLOOR,
 )
 from core.engine.predict import Prediction
+from core.model.jit import compiled
 from core.model.toolpath import ToolPath
 
 
@@ -271,13 +272,15 @@ def _move_values(pred: Prediction) -> NDArray[np.int64] | None:
     return np.stack([np.asarray(c, dtype=np.float64).view(np.int64) for c in cols])
 
 
-def _speeds(pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_]) -> NDArray[np.float64]:
-    """The predicted speed at the grid points ``sel`` of ``d``: where a recent profile on
+def _speeds(
+    pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_], s: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """The predicted speed at the grid points ``sel`` of ``d`` (``s``: their arc lengths,
+    d.s[sel]): where a recent profile on
     the same selection had every per-move value of a move bit for bit (a fit's candidates
     often change a few moves), its speeds there, the others computed -- the same values
     as ``pred.speed_at`` everywhere (the speed at a place depends on its move's values
     alone)."""
-    s = d.s[sel]
     bits = _move_values(pred) if which == "calibration" else None
     if bits is None:
         return pred.speed_at(s, commanded=d.commanded)
@@ -290,7 +293,7 @@ def _speeds(pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_]) -> ND
     for old_bits, k, v in recent:
         if old_bits.shape != bits.shape or not np.array_equal(old_bits[0], bits[0]):
             continue  # other moves (their starts decide which move a place is on)
-        changed = (old_bits != bits).any(axis=0)[k]
+        changed = _changed_moves(old_bits, bits)[k]
         if best is None or np.count_nonzero(changed) < np.count_nonzero(best[0]):
             best = (changed, k, v)
     if best is None:
@@ -304,6 +307,34 @@ def _speeds(pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_]) -> ND
     recent.append((bits, k, v))
     del recent[:-RECENT]
     return v
+
+
+def _changed_moves(old: NDArray[np.int64], new: NDArray[np.int64]) -> NDArray[np.bool_]:
+    """The moves (columns of two (values, moves) arrays of bits) where any value differs."""
+    kernels = compiled()
+    if kernels is not None:  # one pass, no (values, moves) temporary
+        return kernels.changed_moves(old, new)
+    return (old != new).any(axis=0)
+
+
+def _selected(d: Data, which: str, sel: NDArray[np.bool_]) -> tuple[NDArray, NDArray, NDArray]:
+    """The arc lengths, measured speeds and time weights of ``d`` at its grid points
+    ``sel``: for the calibration data (``which``) gathered once per grid and selection (a
+    fit asks for them at every candidate), else gathered."""
+    if which != "calibration":
+        return d.s[sel], d.v[sel], d.weight[sel]
+    key = "calibration rows"
+    entry = d.memo.get(key)
+    # (copies of a Data share its memo: kept for this grid, its speeds and weights only)
+    if (
+        entry is None
+        or entry[0] is not sel
+        or entry[1] is not d.s
+        or entry[2] is not d.v
+        or (entry[3] is not d.weight)
+    ):
+        entry = d.memo[key] = (sel, d.s, d.v, d.weight, d.s[sel], d.v[sel], d.weight[sel])
+    return entry[4], entry[5], entry[6]
 
 
 def gap(
@@ -326,11 +357,11 @@ def gap(
         )
         if not sel.any():
             continue
+        s_sel, v_sel, w = _selected(d, which, sel)
         if which == "held_out" and speeds is not None:
-            r = d.v[sel] - speeds[i]
+            r = v_sel - speeds[i]
         else:
-            r = d.v[sel] - _speeds(preds[d.case], d, which, sel)
-        w = d.weight[sel]
+            r = v_sel - _speeds(preds[d.case], d, which, sel, s_sel)
         sq += float(np.sum(w * r * r))
         n += float(w.sum())
     return math.sqrt(sq / n) * PER_MIN if n > 0 else 0.0

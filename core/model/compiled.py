@@ -1066,3 +1066,16 @@ def corner_limits(
         feed[i] = best
         limit[i] = at
     return feed, limit
+
+
+@kernel
+def changed_moves(old: np.ndarray, new: np.ndarray) -> np.ndarray:
+    """(old != new).any(axis=0) of two (columns, moves) int64 arrays: the moves where any
+    column differs."""
+    rows, n = new.shape
+    out = np.zeros(n, dtype=np.bool_)
+    for r in range(rows):
+        for j in range(n):
+            if old[r, j] != new[r, j]:
+                out[j] = True
+    return out
