@@ -17,7 +17,10 @@ without its workers); the sum of every process's peak resident set, the workers'
 forked from count in both, and peaks at different times are added); and the peak of the
 process tree's proportional set size, sampled (shared pages divided among the processes
 that share them: what the tree held at once, short of a peak between two samples). Without
-/proc (not Linux) only the first.
+/proc (not Linux) only the first. The sampling slows the diagnosis it watches (reading a
+process's smaps_rollup walks its page tables: 0.4 s of 10 s on this project's VM,
+2026-11-28), so the ``--runs`` timed runs are not sampled and one more run is, for the
+workers' memory only.
 """
 
 from __future__ import annotations
@@ -89,9 +92,10 @@ def _kb(path: Path, key: str) -> float:
     return math.nan
 
 
-def run_tree(cmd: list[str]) -> Usage:
+def run_tree(cmd: list[str], *, sample: bool = True) -> Usage:
     """Wall time and memory of one process and the workers it forks (see the module
-    docstring); its output is thrown away."""
+    docstring; ``sample`` False: the process's own peak only, nothing read from /proc while
+    it runs); its output is thrown away."""
     t0 = time.perf_counter()
     proc = subprocess.Popen(
         cmd, stdin=subprocess.DEVNULL, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL
@@ -113,7 +117,7 @@ def run_tree(cmd: list[str]) -> Usage:
                 pss_peak[0] = pss if math.isnan(pss_peak[0]) else max(pss_peak[0], pss)
 
     sampler = threading.Thread(target=sample, daemon=True)
-    if PROC.joinpath("self", "smaps_rollup").exists():
+    if sample and PROC.joinpath("self", "smaps_rollup").exists():
         sampler.start()
     _, status, usage = os.wait4(proc.pid, 0)
     wall = time.perf_counter() - t0
@@ -150,22 +154,19 @@ def main() -> int:
         write_csv(trace, trace_path)
         t_vm = time.perf_counter() - t0
         n = len(trace.t)
-        runs = [
-            run_tree(
-                ncperf(
-                    "diagnose",
-                    str(PROGRAM),
-                    str(trace_path),
-                    "--machine",
-                    PRESET,
-                    "--svg",
-                    str(Path(tmp) / "out.svg"),
-                    "--jobs",
-                    str(args.jobs),
-                )
-            )
-            for _ in range(args.runs)
-        ]
+        cmd = ncperf(
+            "diagnose",
+            str(PROGRAM),
+            str(trace_path),
+            "--machine",
+            PRESET,
+            "--svg",
+            str(Path(tmp) / "out.svg"),
+            "--jobs",
+            str(args.jobs),
+        )
+        runs = [run_tree(cmd, sample=False) for _ in range(args.runs)]
+        watched = run_tree(cmd)  # the workers' memory (not timed: the sampling slows it)
     walls = [u.wall for u in runs]
 
     today = datetime.date.today().isoformat()
@@ -182,16 +183,17 @@ def main() -> int:
     print("|---|---|---|---|---|---|---|---|---|")
     print(
         f"| {PROGRAM.name} on {PRESET}, t_block {args.t_block * 1000:g} ms | {n:,} | "
-        f"{trace.t[-1] - trace.t[0]:.0f} | {args.jobs} ({max(u.workers for u in runs)}) | "
+        f"{trace.t[-1] - trace.t[0]:.0f} | {args.jobs} ({watched.workers}) | "
         f"{min(walls):.1f} | {statistics.median(walls):.1f} | "
-        f"{max(u.rss for u in runs):.0f} | {_mb(max(u.rss_sum for u in runs))} | "
-        f"{_mb(max(u.pss_tree for u in runs))} |"
+        f"{max(u.rss for u in [*runs, watched]):.0f} | {_mb(watched.rss_sum)} | "
+        f"{_mb(watched.pss_tree)} |"
     )
     print(
-        f"\nMemory: the ncperf process's peak RSS from os.wait4 (without its workers); the sum "
-        f"of every process's peak RSS, the workers' sampled every {SAMPLE_S:g} s (an upper "
-        "bound: pages shared with the parent count twice); the process tree's peak "
-        f"proportional set size, sampled every {SAMPLE_S:g} s."
+        f"\nWall: {args.runs} run(s) not watched. Memory: the ncperf process's peak RSS from "
+        "os.wait4 (without its workers; every run); the sum of every process's peak RSS, the "
+        f"workers' sampled every {SAMPLE_S:g} s (an upper bound: pages shared with the parent "
+        "count twice), and the process tree's peak proportional set size, sampled every "
+        f"{SAMPLE_S:g} s, both of one more run (not timed: the sampling slows it)."
     )
     return 0
 
