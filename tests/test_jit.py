@@ -80,6 +80,35 @@ def test_projection_is_numpys(monkeypatch):
         same(*_both(monkeypatch, partial(samples.project_near, mid, g)))
 
 
+def test_projection_in_two_halves_is_one_threads(monkeypatch):
+    """A projection of many points (80k: two halves on two threads, cut between two of the
+    kernel's blocks of points) gives the bits of one thread and of numpy's code, where
+    the halves' blocks search differently (near points, far ones)."""
+    import core.model.sampling as sampling
+    from core.model.pieces import two_cores
+
+    if not two_cores():
+        pytest.skip("one core: nothing runs side by side")
+    tp, rng = next(iter(_cases()))
+    samples = tp.sample(PROJECTION_STEP)
+    m = 80_000
+    s_true = rng.uniform(0.0, tp.end_s[-1], m)
+    spread = np.where(np.arange(m) < m // 2, 0.001, 0.3)[:, None]  # (the halves differ)
+    q = tp.point_at(s_true) + rng.normal(0.0, 1.0, (m, 3)) * spread
+    guess = s_true + rng.normal(0.0, 0.05, m)
+    calls = []
+    real = sampling.side_by_side
+    monkeypatch.setattr(sampling, "side_by_side", lambda a, b: calls.append(1) or real(a, b))
+    plain, two = _both(monkeypatch, partial(samples.project_near, q, guess))
+    assert calls
+    monkeypatch.setattr(sampling, "two_cores", lambda: False)
+    calls.clear()
+    one = samples.project_near(q, guess)
+    assert not calls
+    same(one, two)
+    same(plain, two)
+
+
 def test_line_search_is_numpys(monkeypatch):
     """core.diagnosis.align._project's search of each program line's samples (the kernel
     project_lines against numpy's line-by-line search): samples near the path and off it,
@@ -120,6 +149,22 @@ def test_line_search_is_numpys(monkeypatch):
     over = (line % 2 == 1)[:, None] * np.array([0.5, 0.0, 0.0])
     plain, fast = _both(monkeypatch, lambda: _project(tp, q + over, line, jumped))
     same(plain, fast)
+    # 46k samples: their lines in two halves on two threads where two cores are, the bits
+    # of one thread
+    import core.diagnosis.align as align_module
+    from core.model.pieces import two_cores
+
+    if two_cores():
+        calls = []
+        real = align_module.side_by_side
+        monkeypatch.setattr(
+            align_module, "side_by_side", lambda a, b: calls.append(1) or real(a, b)
+        )
+        two = _project(tp, q, line, path)
+        assert calls
+        monkeypatch.setattr(align_module, "two_cores", lambda: False)
+        one = _project(tp, q, line, path)
+        same(one, two)
 
 
 def _numbers(rng: np.random.Generator, n: int) -> list[str]:

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 from core.model import geometry as g
 from core.model.errors import InputError
 from core.model.jit import allow, compiled
+from core.model.pieces import SPLIT, side_by_side, two_cores
 from core.model.sampling import PROJECTION_STEP, PathSamples, isotonic
 from core.model.tolerances import TOL
 from core.model.toolpath import ToolPath
@@ -328,25 +329,27 @@ def _project_compiled(
     first = np.where(meet[:, None], merged, first)
     second = np.where(both[:, None], np.where(lag_first, near, lag), none)
     win = np.ascontiguousarray(np.concatenate([first, second], axis=1), dtype=np.int64)
-    lo, hi = u_first[known], u_last[known]
+    lo, hi = u_first[known].astype(np.int64), u_last[known].astype(np.int64)
     qs = q[by_line]
     px, py, pz = path.columns
-    s_l, d_l = kernels.project_lines(
-        np.ascontiguousarray(qs[:, 0]),
-        np.ascontiguousarray(qs[:, 1]),
-        np.ascontiguousarray(qs[:, 2]),
-        lo.astype(np.int64),
-        hi.astype(np.int64),
-        np.ascontiguousarray(s_a, dtype=np.float64),
-        np.stack([i_a, i_b1], 1).astype(np.int64),
-        win,
-        px,
-        py,
-        pz,
-        np.ascontiguousarray(s_p),
-        (TOL.sequence_tie, TOL.pass_tie),
-        _jumps(path),
-    )
+    cols = tuple(np.ascontiguousarray(qs[:, c]) for c in range(3))
+    s_a = np.ascontiguousarray(s_a, dtype=np.float64)
+    own = np.stack([i_a, i_b1], 1).astype(np.int64)
+    rest = (px, py, pz, np.ascontiguousarray(s_p), (TOL.sequence_tie, TOL.pass_tie), _jumps(path))
+
+    def lines(k: slice) -> tuple[NDArray, NDArray]:
+        return kernels.project_lines(*cols, lo[k], hi[k], s_a[k], own[k], win[k], *rest)
+
+    # each line's samples its own: two halves of the samples' lines on two threads (a
+    # nogil kernel), each writing its lines' samples (NaN elsewhere)
+    h = int(np.searchsorted(hi, qs.shape[0] // 2))
+    if qs.shape[0] < 2 * SPLIT or not two_cores() or not 0 < h < lo.size:
+        s_l, d_l = lines(slice(None))
+    else:
+        (s1, d1), (s2, d2) = side_by_side(lambda: lines(slice(0, h)), lambda: lines(slice(h, None)))
+        cut = int(lo[h])  # (the first half's lines have the samples before it)
+        s_l = np.concatenate([s1[:cut], s2[cut:]])
+        d_l = np.concatenate([d1[:cut], d2[cut:]])
     done = np.repeat(known, u_last - u_first)  # the samples of the program's lines
     s_l = np.where(done, s_l, 0.0)
     d_l = np.where(done, d_l, np.inf)

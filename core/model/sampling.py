@@ -15,6 +15,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from core.model.jit import compiled
+from core.model.pieces import SPLIT, side_by_side, two_cores
 from core.model.tolerances import TOL
 
 #: Path sampling step (mm) for projecting points on the path: measured samples
@@ -119,10 +120,10 @@ class PathSamples:
         kernels = compiled()
         if kernels is not None:  # the same search point by point (core.model.jit)
             px, py, pz = self.columns
-            return kernels.project_near(
-                np.ascontiguousarray(q),
-                np.ascontiguousarray(s_guess),
-                kernels.sorted_places(np.ascontiguousarray(s_p), np.ascontiguousarray(s_guess)),
+            q = np.ascontiguousarray(q)
+            s_guess = np.ascontiguousarray(s_guess)
+            j = kernels.sorted_places(np.ascontiguousarray(s_p), s_guess)
+            path = (
                 px,
                 py,
                 pz,
@@ -133,6 +134,16 @@ class PathSamples:
                 (NEAR_BLOCK, NEAR_PROBE, NEAR_FIRST, CLEAR_FROM, COARSE),
                 (NEAR_WORTH, NEAR_SLACK, TOL.pass_tie),
             )
+            # two halves on two threads (a nogil kernel), cut between two of its blocks:
+            # each block of points decides on its own how it searches, so the same search
+            h = q.shape[0] // 2 // NEAR_BLOCK * NEAR_BLOCK
+            if h < SPLIT or not two_cores():
+                return kernels.project_near(q, s_guess, j, *path)
+            (s1, d1), (s2, d2) = side_by_side(
+                lambda: kernels.project_near(q[:h], s_guess[:h], j[:h], *path),
+                lambda: kernels.project_near(q[h:], s_guess[h:], j[h:], *path),
+            )
+            return np.concatenate([s1, s2]), np.concatenate([d1, d2])
         # The nearest few points first, where that pays and tells (:meth:`_near_first`);
         # elsewhere the window (:meth:`_window`): every COARSE-th offset of it for all
         # points, then the offsets between two of them only for the points they might be
