@@ -69,9 +69,14 @@ class Page:
         self.page.on("request", lambda r: self.requests.append(r.url))
         self.url = file.resolve().as_uri()
         self.page.goto(self.url)
-        self.page.wait_for_function(
-            "window.ncperf && (window.ncperf.ready || window.ncperfErrors.length)", timeout=60_000
-        )
+        # polled from here: Playwright's wait_for_function polls inside the page with eval,
+        # which the viewer's Content-Security-Policy (no 'unsafe-eval') refuses once the page
+        # is slow enough to need a second look (a million moves on a loaded machine)
+        deadline = time.monotonic() + 60.0
+        ready = "!!(window.ncperf && (window.ncperf.ready || window.ncperfErrors.length))"
+        while not self.page.evaluate(ready):
+            assert time.monotonic() < deadline, "the viewer did not get ready in 60 s"
+            self.page.wait_for_timeout(50)
         assert self.page.evaluate("window.ncperfErrors") == []
 
     def _console(self, msg) -> None:
