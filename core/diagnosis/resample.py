@@ -276,11 +276,10 @@ def _speeds(
     pred: Prediction, d: Data, which: str, sel: NDArray[np.bool_], s: NDArray[np.float64]
 ) -> NDArray[np.float64]:
     """The predicted speed at the grid points ``sel`` of ``d`` (``s``: their arc lengths,
-    d.s[sel]): where a recent profile on
-    the same selection had every per-move value of a move bit for bit (a fit's candidates
-    often change a few moves), its speeds there, the others computed -- the same values
-    as ``pred.speed_at`` everywhere (the speed at a place depends on its move's values
-    alone)."""
+    d.s[sel]): where a recent profile on the same selection had every per-move value of a
+    move bit for bit (a fit's candidates often change a few moves), its speeds there, the
+    others computed -- the same values as ``pred.speed_at`` everywhere (the speed at a
+    place depends on its move's values alone)."""
     bits = _move_values(pred) if which == "calibration" else None
     if bits is None:
         return pred.speed_at(s, commanded=d.commanded)
@@ -326,14 +325,9 @@ def _selected(d: Data, which: str, sel: NDArray[np.bool_]) -> tuple[NDArray, NDA
     key = "calibration rows"
     entry = d.memo.get(key)
     # (copies of a Data share its memo: kept for this grid, its speeds and weights only)
-    if (
-        entry is None
-        or entry[0] is not sel
-        or entry[1] is not d.s
-        or entry[2] is not d.v
-        or (entry[3] is not d.weight)
-    ):
-        entry = d.memo[key] = (sel, d.s, d.v, d.weight, d.s[sel], d.v[sel], d.weight[sel])
+    made_of = (sel, d.s, d.v, d.weight)
+    if entry is None or any(a is not b for a, b in zip(entry[:4], made_of, strict=True)):
+        entry = d.memo[key] = (*made_of, d.s[sel], d.v[sel], d.weight[sel])
     return entry[4], entry[5], entry[6]
 
 
