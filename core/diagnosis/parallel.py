@@ -61,38 +61,14 @@ def fit_each(
     effects: Mapping[str, Effect],
     data: Sequence[Any],
     objective: Objective = FEED,
-    *,
-    jobs: int = 1,
-    progress: Callable[[str], None] | None = None,
-    step: str = STEP,
-    start: str = START,
-    done: str = DONE,
-    rapids: Sequence[Any] = (),
+    **options: Any,
 ) -> dict[str, Fitted]:
     """Every effect of ``effects`` fitted on top of ``base``
-    (:func:`core.diagnosis.fit.fit`), on ``jobs`` worker processes where it can (see the
-    module docstring): {name: (params, predictions)}, in the order of ``effects``, the same
-    to the bit whatever ``jobs``. ``rapids``: more data the effects that act on the rapids
-    (``Effect.rapids``) are fitted on besides ``data`` -- the rapids of the runs
-    (:func:`core.diagnosis.resample.rapid_data`), where an axis's or the path's limits show
-    as on the feed moves. ``progress``, if given, is told ``step`` as each fit
-    starts (one after the other), or ``start`` once and ``done`` as each fit ends (on
-    workers), formatted with the effect's ``name``, ``k`` and ``n`` and the ``workers``."""
-    both = fit_and_weigh(
-        indicators_of,
-        tps,
-        base,
-        effects,
-        data,
-        None,
-        objective,
-        jobs=jobs,
-        progress=progress,
-        step=step,
-        start=start,
-        done=done,
-        rapids=rapids,
-    )
+    (:func:`core.diagnosis.fit.fit`), on worker processes where it can (see the module
+    docstring): {name: (params, predictions)}, in the order of ``effects``, the same to the
+    bit whatever the number of workers. ``options``: :func:`fit_and_weigh`'s (``jobs``,
+    ``progress`` and its lines, ``rapids``)."""
+    both = fit_and_weigh(indicators_of, tps, base, effects, data, None, objective, **options)
     return {name: fitted for name, (fitted, _) in both.items()}
 
 
@@ -112,12 +88,19 @@ def fit_and_weigh(
     done: str = DONE,
     rapids: Sequence[Any] = (),
 ) -> dict[str, tuple[Fitted, W | None]]:
-    """:func:`fit_each`, each fit then weighed where it was made: {name: ((params,
-    predictions), weigh(name, (params, predictions)))} (None without ``weigh``) -- the
-    evidence of every fit (its held-out gaps, its test) made on the workers beside the
-    fits rather than one after the other once they are all back. ``weigh`` must give
-    what it would give in this process (a function of the fit and of what the workers
-    inherit)."""
+    """Every effect of ``effects`` fitted on top of ``base`` (:func:`core.diagnosis.fit.fit`),
+    on ``jobs`` worker processes where it can, and each fit then weighed where it was made:
+    {name: ((params, predictions), weigh(name, (params, predictions)))} (None without
+    ``weigh``), in the order of ``effects``, the same to the bit whatever ``jobs`` -- the
+    evidence of every fit (its held-out gaps, its test) made on the workers beside the fits
+    rather than one after the other once they are all back. ``weigh`` must give what it
+    would give in this process (a function of the fit and of what the workers inherit).
+    ``rapids``: more data the effects that act on the rapids (``Effect.rapids``) are fitted
+    on besides ``data`` -- the rapids of the runs
+    (:func:`core.diagnosis.resample.rapid_data`), where an axis's or the path's limits show
+    as on the feed moves. ``progress``, if given, is told ``step`` as each fit starts (one
+    after the other), or ``start`` once and ``done`` as each fit ends (on workers),
+    formatted with the effect's ``name``, ``k`` and ``n`` and the ``workers``."""
     say = progress or (lambda _: None)
     names = list(effects)
     with_rapids = [*data, *rapids]

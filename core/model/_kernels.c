@@ -120,8 +120,8 @@ static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t 
    moves where one moved; here only the moves that moved are written: the others' are the
    same values already (off is a != acc and term the pass term of a wherever they are
    made, and each term was checked for finite when it was made). work: n doubles (the
-   ramps' speed changes); aj and lim (or NULL): acc / jerk and acc * acc / jerk, which do not change from round to
-   round (the same quotients, made once by numpy). */
+   ramps' speed changes); aj and lim (or NULL): acc / jerk and acc * acc / jerk, which do
+   not change from round to round (the same quotients, made once by numpy). */
 EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const uint8_t *through,
                            const double *v0, const double *v1, const double *peak, double *a,
                            const int8_t *last, double *term, uint8_t *off, const double *acc,
@@ -218,10 +218,11 @@ EXPORT void passes_join(int64_t first, int64_t count, const double *b2, const do
 
 /* plugins.tangential._corner_feed_rows after its jerk column v_jerk ((m, 3) row-major:
    numpy's cube roots, which may be SIMD code of its own) for the corners first..first +
-   count - 1 (two threads take a half each): each corner's feed limits of the axes' speeds
-   (max_feed / share_t), normal accelerations (sqrt(a_n R / share_n)) and jerks, inf where
-   an axis has no share, NaN as 0 and -inf as the lowest double (np.nan_to_num), and the
-   lowest of the nine with the first of equals (np.argmin). */
+   count - 1 (the plugin's pieces of corners run on two threads, each its own call): each
+   corner's feed limits of the axes' speeds (max_feed / share_t), normal accelerations
+   (sqrt(a_n R / share_n)) and jerks, inf where an axis has no share, NaN as 0 and -inf as
+   the lowest double (np.nan_to_num), and the lowest of the nine with the first of equals
+   (np.argmin). */
 EXPORT void corner_limits(int64_t first, int64_t count, const double *share_t,
                           const double *share_n, const double *radius, const double *v_jerk,
                           const double *max_feed, const double *a_n, double *feed,

@@ -4,9 +4,10 @@ numba comes with ncperf where it ships wheels (CPython 3.11-3.13 on 64-bit x86 a
 ``pip install "ncperf[fast]"`` elsewhere, if it installs there). The kernels run the
 diagnosis's hottest loops (the profile's rounds and passes, the speed inside jerk-limited
 ramps, the projection of points onto the path, the search of each program line's samples,
-the trace CSV's numbers, LinuxCNC's look-ahead walks) element by element with the same
-floating-point operations in the same order as numpy's array-wide code: the same bits
-(``tests/test_jit.py``). They are used where all three hold:
+the trace CSV's numbers, LinuxCNC's look-ahead walks, the servo lag and the speed of
+filtered positions, the corner model's limits, the moves a fit's candidate changed)
+element by element with the same floating-point operations in the same order as numpy's
+array-wide code: the same bits (``tests/test_jit.py``). They are used where all three hold:
 
 * the diagnosis asked for them (:func:`allow`: :func:`core.diagnosis.align.align`,
   :func:`core.diagnosis.diagnose.diagnose_cases`, :func:`core.diagnosis.calibrate.calibrate`
