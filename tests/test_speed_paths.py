@@ -8,7 +8,7 @@ import pytest
 
 from core.engine import profile as profile_module
 from core.engine.profile import build_profile
-from core.model.arrays import isin, put_where, select, unique
+from core.model.arrays import isin, put_where, same_bits, select, unique
 from core.model.machine import resolve_machine
 from core.model.toolpath import ExtractOptions
 
@@ -33,6 +33,22 @@ def test_unique_and_isin_are_numpys():
     grid = rng.integers(0, 9, (4, 5))
     assert np.array_equal(unique(grid), np.unique(grid))
     assert np.array_equal(isin(grid, [1, 2]), np.isin(grid, [1, 2]))
+
+
+def test_same_bits_is_identity_of_bytes():
+    """same_bits: equal only where dtype, shape and every byte are (a NaN equals its own
+    bits, 0.0 not -0.0); strided views and Fortran order compared by their values' bytes;
+    eight-byte and other items alike."""
+    a = np.array([0.0, np.nan, 1.5, -np.inf])
+    assert same_bits(a, a.copy())
+    assert not same_bits(a, np.array([-0.0, np.nan, 1.5, -np.inf]))
+    assert not same_bits(a, a.astype(np.float32))
+    assert not same_bits(a, a[:3])
+    assert same_bits(np.arange(12.0).reshape(3, 4)[:, 1], np.array([1.0, 5.0, 9.0]))
+    assert same_bits(np.asfortranarray(np.eye(3)), np.eye(3))
+    assert same_bits(np.array([1, 2], np.int8), np.array([1, 2], np.int8))
+    assert not same_bits(np.array([1, 2], np.int8), np.array([1, 3], np.int8))
+    assert same_bits(np.array([True, False]), np.array([True, False]))
 
 
 def test_put_where_and_select_are_copyto_and_where():

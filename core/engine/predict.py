@@ -16,6 +16,7 @@ from numpy.typing import ArrayLike, NDArray
 from core.engine.effects import Setup
 from core.engine.indicators import Evaluation, Indicator, IndicatorSource, combine
 from core.engine.profile import Profile, RoundsMemo, build_profile
+from core.model.arrays import same_bits
 from core.model.jit import compiled
 from core.model.sampling import PROJECTION_STEP, isotonic
 from core.model.tolerances import TOL
@@ -349,11 +350,7 @@ def _same(a: object, b: object) -> bool:
     if isinstance(a, tuple) and isinstance(b, tuple):
         return len(a) == len(b) and all(_same(x, y) for x, y in zip(a, b, strict=True))
     if isinstance(a, np.ndarray) and isinstance(b, np.ndarray):
-        if a.dtype != b.dtype or a.shape != b.shape:
-            return False
-        x = np.ascontiguousarray(a).reshape(-1).view(np.uint8)
-        y = np.ascontiguousarray(b).reshape(-1).view(np.uint8)
-        return bool(np.array_equal(x, y))
+        return same_bits(a, b)
     if type(a) is type(b) and type(a) in (int, float, bool):
         return bool(a == b) and math.copysign(1.0, a) == math.copysign(1.0, b)  # type: ignore[arg-type]
     return type(a) is type(b) is str and a == b

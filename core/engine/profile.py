@@ -56,7 +56,7 @@ from numpy.typing import ArrayLike, NDArray
 from core.engine import rotary
 from core.engine.indicators import LCNC_TANGENTIAL_RATIO, Evaluation
 from core.engine.lookahead import lazy_caps
-from core.model.arrays import isin, nan_to_num, put_where, select
+from core.model.arrays import isin, nan_to_num, put_where, same_bits, select
 from core.model.heap import release_free_heap
 from core.model.jit import compiled
 from core.model.native import Kernels
@@ -2193,23 +2193,13 @@ class RoundsMemo:
         if self._last is None:
             return None
         n, kept, out = self._last
-        if n != rounds or not all(_same_bits(a, b) for a, b in zip(inputs, kept, strict=True)):
+        if n != rounds or not all(same_bits(a, b) for a, b in zip(inputs, kept, strict=True)):
             return None
         return tuple(x.copy() for x in out)
 
     def put(self, rounds: int, inputs: tuple[NDArray, ...], out: tuple[NDArray, ...]) -> None:
         """Remember these rounds (copies: the caller keeps using its arrays)."""
         self._last = (rounds, tuple(x.copy() for x in inputs), tuple(x.copy() for x in out))
-
-
-def _same_bits(a: NDArray, b: NDArray) -> bool:
-    """Whether two arrays have one dtype, one shape and the same bits."""
-    if a.dtype != b.dtype or a.shape != b.shape:
-        return False
-    as_int = np.int64 if a.dtype.itemsize == 8 else np.uint8
-    x = a.view(as_int) if a.dtype.itemsize == 8 else np.ascontiguousarray(a).view(as_int)
-    y = b.view(as_int) if b.dtype.itemsize == 8 else np.ascontiguousarray(b).view(as_int)
-    return bool(np.array_equal(x, y))
 
 
 def build_profile(
