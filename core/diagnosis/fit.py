@@ -34,6 +34,30 @@ def points_1d(p: Param) -> int:
     return GRID_1D if p.points is None else p.points
 
 
+def grid_points(group: Sequence[Param]) -> int:
+    """Points per parameter of the search's grid over ``group``: a parameter's own 1-D grid
+    alone, GRID_2D for two, GRID_ND for more."""
+    if len(group) == 1:
+        return points_1d(group[0])
+    return GRID_2D if len(group) == 2 else GRID_ND
+
+
+#: The most parameters an effect with stages searches its first stage over on a grid.
+MESHED = 3
+
+
+def _mesh(group: Sequence[Param], start: dict[str, float]) -> list[dict[str, float]]:
+    """``start`` with every point of the grid over ``group`` (:func:`grid_points` a
+    parameter), the first parameter varying slowest."""
+    grids = [grid(p, grid_points(group)) for p in group]
+    mesh = np.meshgrid(*grids, indexing="ij")
+    names = [p.name for p in group]
+    return [
+        start | dict(zip(names, map(float, vals), strict=True))
+        for vals in zip(*(g.ravel() for g in mesh), strict=True)
+    ]
+
+
 def grid(p: Param, count: int) -> NDArray[np.float64]:
     if p.log and p.low > 0:
         g = np.geomspace(p.low, p.high, count)
@@ -131,17 +155,7 @@ def fit(
         # each end of the coarse search refined, the better one kept (ties: the first)
         ends = [_refined(eff, s, defaults, score) for s in _staged(eff, defaults, score)]
         return result(min(ends, key=score))
-    if len(params) == 1:
-        p = params[0]
-        candidates = [{p.name: float(x)} for x in grid(p, points_1d(p))]
-    else:
-        per = GRID_2D if len(params) == 2 else GRID_ND
-        grids = [grid(p, per) for p in params]
-        mesh = np.meshgrid(*grids, indexing="ij")
-        candidates = [
-            dict(zip([p.name for p in params], map(float, vals), strict=True))
-            for vals in zip(*(g.ravel() for g in mesh), strict=True)
-        ]
+    candidates = _mesh(params, {})
     # Defaults first: among equal scores the effect changes nothing.
     candidates.insert(0, dict(defaults))
     best = min(candidates, key=score)
@@ -166,15 +180,14 @@ def scores_planned(eff: Effect) -> int:
     refine = 2 * REFINE * len(params) + len(params)  # two trials a round, then the defaults
     if eff.stages:
         first = [p for p in params if p.name in eff.stages[0]]
-        per = points_1d(first[0]) if len(first) == 1 else GRID_2D if len(first) == 2 else GRID_ND
+        meshed = grid_points(first) ** len(first) if len(first) <= MESHED else 0
         later = lines - sum(points_1d(p) for p in first)
         # the first stage's grid and its lines twice; the later stages' lines twice from
         # each of the two ends; each end refined
-        return 1 + per ** len(first) + 2 * (lines - later) + 2 * 2 * later + 2 * refine
+        return 1 + meshed + 2 * (lines - later) + 2 * 2 * later + 2 * refine
     if len(params) == 1:
         return 1 + lines + refine
-    per = GRID_2D if len(params) == 2 else GRID_ND
-    return 1 + per ** len(params) + lines + refine
+    return 1 + grid_points(params) ** len(params) + lines + refine
 
 
 def _remembered(indicators_of: IndicatorSource) -> IndicatorSource:
@@ -218,15 +231,8 @@ def _staged(
 
     first = [by_name[n] for n in eff.stages[0]]
     best = dict(defaults)
-    if len(first) <= 3:
-        per = points_1d(first[0]) if len(first) == 1 else GRID_2D if len(first) == 2 else GRID_ND
-        grids = [grid(p, per) for p in first]
-        mesh = np.meshgrid(*grids, indexing="ij")
-        candidates = [best] + [
-            best | dict(zip([p.name for p in first], map(float, vals), strict=True))
-            for vals in zip(*(g.ravel() for g in mesh), strict=True)
-        ]
-        best = min(candidates, key=score)
+    if len(first) <= MESHED:
+        best = min([best, *_mesh(first, best)], key=score)
     best = lines(best, eff.stages[:1])
     ends = [lines(best, eff.stages[1:])]
     if best != defaults and len(eff.stages) > 1:
