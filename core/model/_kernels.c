@@ -45,7 +45,7 @@ static inline double vmin(double a, double b) {
 
 /* The version of this interface: core/model/native.py loads a library of its own
    version only (a stale build beside newer Python code is not used). */
-EXPORT int64_t ncperf_kernels_version(void) { return 7; }
+EXPORT int64_t ncperf_kernels_version(void) { return 8; }
 
 /* core.engine.profile._Rounds._all_marks (every != 0: the moves first..first+count-1) or
    _marks_of of the moves at[first..first+count-1] (two threads take a half each): each move's peak, whether it accelerates (rise) or brakes
@@ -217,17 +217,15 @@ EXPORT void passes_join(int64_t first, int64_t count, const double *b2, const do
 }
 
 /* plugins.tangential._corner_feed_rows after its jerk column v_jerk ((m, 3) row-major:
-   numpy's cube roots, which may be SIMD code of its own) for the corners first..first +
-   count - 1 (the plugin's pieces of corners run on two threads, each its own call): each
-   corner's feed limits of the axes' speeds (max_feed / share_t), normal accelerations
-   (sqrt(a_n R / share_n)) and jerks, inf where an axis has no share, NaN as 0 and -inf as
-   the lowest double (np.nan_to_num), and the lowest of the nine with the first of equals
-   (np.argmin). */
-EXPORT void corner_limits(int64_t first, int64_t count, const double *share_t,
-                          const double *share_n, const double *radius, const double *v_jerk,
-                          const double *max_feed, const double *a_n, double *feed,
-                          int64_t *limit) {
-    for (int64_t i = first; i < first + count; i++) {
+   numpy's cube roots, which may be SIMD code of its own) for m corners (the plugin's
+   pieces of corners run on two threads, each its own call): each corner's feed limits of
+   the axes' speeds (max_feed / share_t), normal accelerations (sqrt(a_n R / share_n)) and
+   jerks, inf where an axis has no share, NaN as 0 and -inf as the lowest double
+   (np.nan_to_num), and the lowest of the nine with the first of equals (np.argmin). */
+EXPORT void corner_limits(int64_t m, const double *share_t, const double *share_n,
+                          const double *radius, const double *v_jerk, const double *max_feed,
+                          const double *a_n, double *feed, int64_t *limit) {
+    for (int64_t i = 0; i < m; i++) {
         double best = 0.0;
         int64_t at = 0;
         for (int c = 0; c < 9; c++) {

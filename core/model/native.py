@@ -31,7 +31,7 @@ from core.model.pieces import SPLIT, side_by_side, two_cores
 
 #: The interface version _kernels.c reports (ncperf_kernels_version): a library built from
 #: another version of the source is not loaded.
-VERSION = 7
+VERSION = 8
 
 _P = ctypes.c_void_p
 _I = ctypes.c_int64
@@ -61,7 +61,7 @@ class Kernels:
         lib.passes_backward.restype = None
         lib.passes_join.argtypes = [_I, _I, *[_P] * 3]
         lib.passes_join.restype = None
-        lib.corner_limits.argtypes = [_I, _I, *[_P] * 8]
+        lib.corner_limits.argtypes = [_I, *[_P] * 8]
         lib.corner_limits.restype = None
 
     def marks(
@@ -175,7 +175,7 @@ class Kernels:
         limit = np.empty(m, dtype=np.int64)
         if m:
             self.lib.corner_limits(
-                0, m, _ptr(share_t, f), _ptr(share_n, f), _ptr(radius, f), _ptr(v_jerk, f),
+                m, _ptr(share_t, f), _ptr(share_n, f), _ptr(radius, f), _ptr(v_jerk, f),
                 _ptr(max_feed, f), _ptr(a_n, f), _ptr(feed, f), _ptr(limit, np.int64),
             )  # fmt: skip
         return feed, limit
