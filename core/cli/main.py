@@ -771,6 +771,24 @@ def _end_process(rc: int) -> None:
     os._exit(rc)
 
 
+def _fill_heap_ahead(args: argparse.Namespace) -> None:
+    """The heap's pages faulted in on the second core ahead of an analysis
+    (:func:`core.model.heap.prefault_heap`), sized by the largest program file of
+    ``analyze``, ``profile`` or ``compare`` (their analyses reuse each other's memory). Not
+    for ``diagnose`` and ``calibrate``: their fits run on forked processes, whose first
+    write to a page inherited from this one faults it in again, as a new page does."""
+    if args.run not in (cmd_analyze, cmd_profile, cmd_compare):
+        return
+    from core.model.heap import prefault_heap, prefault_size
+
+    paths = getattr(args, "programs", None) or [getattr(args, "program", None)]
+    sizes = [
+        os.path.getsize(p) for p in paths if p and os.path.isfile(p)
+    ]  # (else: its error later)
+    if sizes:
+        prefault_heap(prefault_size(max(sizes)))
+
+
 def _main(argv: list[str] | None) -> int:
     from core.facade import Ncperf
     from core.plugins import command_plugin_manager, complete_plugin_manager
@@ -786,6 +804,7 @@ def _main(argv: list[str] | None) -> int:
             from core.model.heap import keep_freed_memory
 
             keep_freed_memory()
+            _fill_heap_ahead(args)  # (while the plugins and numpy are imported)
             nc = Ncperf(complete_plugin_manager(nc.pm))
     except NcperfError as exc:
         print(f"ncperf: {exc}", file=sys.stderr)
