@@ -30,9 +30,12 @@ fills the heap's pages on a thread of its own while the main thread imports nump
 plugins, and hands them back to the heap, where the analysis's arrays then find them
 faulted in. 2026-11-28 (23:00-23:17 UTC): stellabee1's faults after the imports 22,100-
 23,000 -> 6,100-6,900 with 64 MB filled ahead (-> 80 with 96 MB), the imports no slower;
-the whole command, in turns with and without (pairs of runs): stellabee1 (64 MB) 29 +- 12
-ms faster of 0.76 s (30 pairs), tiger.nc (28 MB) 29 +- 10 ms of 0.44 s (20 pairs), the
-1M raster with ``--svg`` (96 MB) 76 +- 131 ms of 2.2 s (8 pairs), peak 405 -> 412 MB.
+the whole command, in turns with and without (pairs of runs, mean difference +- its
+standard error): stellabee1 (64 MB filled) 29 +- 12 ms faster of 0.76 s (30 pairs),
+tiger.nc (28 MB) 29 +- 10 ms of 0.44 s (20 pairs), rasters with ``--svg`` of 200k moves
+(72 MB) 52 +- 13 ms of 0.63 s (16 pairs) and 500k (96 MB) 100 +- 55 ms of 1.5 s (12
+pairs); peaks 1-5 MB higher. The 1M raster (96 MB): 44 +- 111 ms and 398 -> 411 MB
+(10 pairs), no gain to be seen: its columns of 8 MB take numpy's huge pages, 2 MB a fault.
 
 Values are untouched either way: only where free memory lives changes. Elsewhere than glibc
 all three do nothing; a glibc before 2.33 (no ``mallinfo2`` to measure the free heap with)
