@@ -782,9 +782,8 @@ def _fill_heap_ahead(args: argparse.Namespace) -> None:
     from core.model.heap import prefault_heap, prefault_size
 
     paths = getattr(args, "programs", None) or [getattr(args, "program", None)]
-    sizes = [
-        os.path.getsize(p) for p in paths if p and os.path.isfile(p)
-    ]  # (else: its error later)
+    # (a path that is not a file: its error comes with the reading)
+    sizes = [os.path.getsize(p) for p in paths if p and os.path.isfile(p)]
     if sizes:
         prefault_heap(prefault_size(max(sizes)))
 

@@ -160,7 +160,7 @@ def prefault_heap(size: int) -> threading.Thread | None:
     pieces would go back to the system), two cores (on one, the faults cost the same time
     on the only core), ``size`` at least :data:`PREFAULT_MIN`. Returns the thread (a
     daemon: the process does not wait for it), or None. Only where memory lives changes."""
-    from core.model.pieces import two_cores
+    from core.model.cpus import two_cores
 
     lib = _glibc()
     if lib is None or not _kept[0] or size < PREFAULT_MIN or not two_cores():

@@ -11,15 +11,15 @@ so two halves of the moves on two threads take about half the time on two cores
 
 from __future__ import annotations
 
-import os
 import queue
 import threading
 from collections.abc import Callable, Iterator
-from functools import cache
 from typing import TypeVar
 
 import numpy as np
 from numpy.typing import NDArray
+
+from core.model.cpus import two_cores
 
 T = TypeVar("T")
 U = TypeVar("U")
@@ -47,21 +47,6 @@ def piecewise(n: int, dtype: type, f: Callable[[slice], NDArray], size: int = PI
 #: thread and back costs 0.1-0.3 ms on this project's VM, the marks of 20k moves about
 #: 0.5 ms).
 SPLIT = 20_000
-
-
-def usable_cpus() -> int:
-    """The CPUs this process may run on (its affinity where the platform tells it, else all
-    the machine's), at least 1."""
-    try:
-        return max(len(os.sched_getaffinity(0)), 1)
-    except AttributeError:  # no sched_getaffinity (macOS, Windows)
-        return max(os.cpu_count() or 1, 1)
-
-
-@cache
-def two_cores() -> bool:
-    """Whether this process may run on two cores or more."""
-    return usable_cpus() >= 2
 
 
 def side_by_side(first: Callable[[], T], second: Callable[[], U]) -> tuple[T, U]:

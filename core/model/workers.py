@@ -33,7 +33,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any, TypeVar
 
-from core.model.pieces import usable_cpus
+from core.model.cpus import usable_cpus
 
 R = TypeVar("R")
 
@@ -57,7 +57,7 @@ LOCK = threading.Lock()
 
 def default_jobs() -> int:
     """The worker processes to use by default: the CPUs this process may run on
-    (:func:`core.model.pieces.usable_cpus`)."""
+    (:func:`core.model.cpus.usable_cpus`)."""
     return usable_cpus()
 
 
