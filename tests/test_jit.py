@@ -63,6 +63,28 @@ def test_profile_and_its_speeds_are_numpys(monkeypatch, preset):
     same(a, b)
 
 
+@pytest.mark.parametrize("newton", [0, 1, 2, 4])
+def test_ramp_speeds_do_not_depend_on_the_guess(monkeypatch, newton):
+    """Inside a jerk-limited ramp the speed is the bracket the halvings end in; a guess
+    (the trapezoid's place and NEWTON_STEPS Newton steps, the kernel's on products for
+    cubes) is taken only where the check proves it that bracket. So with fewer or more
+    Newton steps -- none: most places go through the halvings -- the kernel's speeds are
+    the bits of numpy's with three."""
+    from core.engine import profile as profile_module
+
+    nc = Ncperf()
+    ev = nc.evaluate(nc.extract(str(PROGRAM)), load_preset("siemens-840d"))
+    prof = build_profile(ev)
+    assert prof.ramps is not None
+    tp = ev.toolpath
+    s = np.linspace(0.0, tp.end_s[-1], 100_001)
+    monkeypatch.setenv(NO_JIT_ENV, "1")
+    reference = prof.speed_at(s)  # numpy's code, three steps
+    monkeypatch.delenv(NO_JIT_ENV)
+    monkeypatch.setattr(profile_module, "NEWTON_STEPS", newton)
+    same(reference, prof.speed_at(s))
+
+
 def test_projection_is_numpys(monkeypatch):
     """project_near's window search and foot, point by point, on the paths of
     tests/test_projection.py (zigzag chords, a path over itself, arcs): guesses near and
