@@ -85,6 +85,38 @@ def test_ramp_speeds_do_not_depend_on_the_guess(monkeypatch, newton):
     same(reference, prof.speed_at(s))
 
 
+def test_the_place_with_products_for_cubes_is_within_the_slack_of_numpys():
+    """The check of a ramp's bracket reads the place with products for cubes where it is
+    farther than SURE_SLACK x margin from the bound (compiled._place_vs); that needs the two
+    places within 11 u T of each other (T: the ramp's size, margin / TOL.sure_compare). On
+    40,000 random ramps and shares, jerk-limited and not, the largest difference against
+    that bound, and the slack at least 8 times it."""
+    from core.engine.profile import HALFWAY, HALVINGS, NEWTON_STEPS
+    from core.model import compiled as kernels
+    from core.model.tolerances import TOL
+
+    consts = (TOL.nil_speed, TOL.tiny, TOL.sure_compare, HALVINGS, HALFWAY, NEWTON_STEPS)
+    rng = np.random.default_rng(11)
+    u = 2.0**-53
+    worst = 0.0
+    for _ in range(40_000):
+        lo, dv = rng.uniform(0, 500) * rng.random() ** 3, rng.uniform(1e-6, 500)
+        a, acc = rng.uniform(10, 5000), rng.uniform(10, 5000)
+        jerk = rng.choice([np.inf, rng.uniform(100, 1e6)])
+        vb = rng.uniform(0, lo + 1.0)
+        terms, _, _, margin, sane = kernels._ramp(lo, dv, a, vb, acc, jerk, consts)
+        if not sane:
+            continue
+        size = margin / TOL.sure_compare
+        p = rng.random() ** rng.choice([1, 4])  # (many near 0, inside the first branch)
+        for rising in (True, False):
+            exact = kernels._place(p, rising, *terms)
+            guess = kernels._place_guess(p, rising, *terms)
+            worst = max(worst, abs(guess - exact) / (u * size))
+    assert worst <= 11.0
+    assert kernels.SURE_SLACK * TOL.sure_compare >= 8 * 11.0 * u
+
+
 def test_projection_is_numpys(monkeypatch):
     """project_near's window search and foot, point by point, on the paths of
     tests/test_projection.py (zigzag chords, a path over itself, arcs): guesses near and
