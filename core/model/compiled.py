@@ -122,11 +122,12 @@ def _place(p: float, rising: bool, *terms: float) -> float:
 def _place_guess(p: float, rising: bool, *terms: float) -> float:
     """:func:`_place` with the cubes as products (p * p * p: within two roundings of pow's,
     several times cheaper than the C library's pow), for the Newton steps of
-    :func:`_ramp_speed`'s guess only. A guess's bits do not reach the result: the bracket it
-    names is taken only where :func:`_sure` (numpy's operations, pow's cubes) proves the
-    halvings end in it, else the halvings run -- core.engine.profile._checked_guess's
-    argument, which holds for any guess. The diagnose benchmark's speeds at its calibration
-    places: 22-27 % less time, the same bits (2026-11-28)."""
+    :func:`_ramp_speed`'s guess and, where it decides, :func:`_sure`'s comparisons
+    (:func:`_place_vs`). A guess's bits do not reach the result: the bracket it names is
+    taken only where :func:`_sure` proves the halvings end in it, else the halvings run --
+    core.engine.profile._checked_guess's argument, which holds for any guess. The diagnose
+    benchmark's speeds at its calibration places: 22-27 % less time for the guess, the
+    same bits (2026-11-28)."""
     return _place_of(False, p, rising, *terms)
 
 
