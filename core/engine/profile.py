@@ -59,7 +59,6 @@ from core.engine.lookahead import lazy_caps
 from core.model.arrays import isin, nan_to_num, put_where, same_bits, select
 from core.model.heap import release_free_heap
 from core.model.jit import compiled
-from core.model.native import Kernels
 from core.model.native import kernels as round_kernels
 from core.model.pieces import PIECE, SPLIT, pieces, piecewise, side_by_side, two_cores
 from core.model.tolerances import SAMPLE_DT, TOL
@@ -1175,9 +1174,9 @@ class _Rounds:
         # per direction (True: accelerating): the moves whose acceleration the damping kept
         # off their target, and their targets
         self.behind = {d: (np.zeros(0, dtype=np.intp), np.zeros(0)) for d in (True, False)}
-        # acc / jerk and acc * acc / jerk, which the C kernels' dense rounds take instead of
-        # dividing again in every round (the quotients effective_acceleration makes; made
-        # where those kernels run: :meth:`_fix`)
+        # acc / jerk and acc * acc / jerk, which the kernels' dense rounds (numba's and C)
+        # take instead of dividing again in every round (the quotients
+        # effective_acceleration makes; made where those kernels run: :meth:`_fix`)
         self.fixed: tuple[NDArray, NDArray] | None = None
 
     def passes(self) -> NDArray:
@@ -1509,10 +1508,10 @@ class _Rounds:
         if kernels is not None:  # the same operations move by move (core.model.native)
             step = np.empty(n, dtype=np.int8)
             moved = np.empty(n, dtype=bool)
-            extra = {"fixed": self.fixed} if isinstance(kernels, Kernels) else {}
+            assert self.fixed is not None  # (made by _fix where kernels run the rounds)
             change, finite, at, want = kernels.dense_round(
                 rising, phase, through, v0, v1, peak, a, last, term, off, acc, jerk,
-                between, step, moved, TOL.nil_speed, finite, **extra,
+                between, step, moved, TOL.nil_speed, finite, fixed=self.fixed,
             )  # fmt: skip
             self._keep_round(rising, step, moved, (at, want))
             return float(change), bool(finite)
@@ -1570,9 +1569,9 @@ class _Rounds:
         return change, finite
 
     def _fix(self) -> None:
-        """:attr:`fixed` made where the C kernels run the rounds (in the caller's thread,
-        before the directions go side by side)."""
-        if self.fixed is None and isinstance(round_kernels(), Kernels):
+        """:attr:`fixed` made where kernels (numba's or C) run the rounds (in the caller's
+        thread, before the directions go side by side)."""
+        if self.fixed is None and round_kernels() is not None:
             with np.errstate(divide="ignore", invalid="ignore"):
                 lim = self.acc * self.acc
                 lim /= self.jerk

@@ -604,6 +604,7 @@ def dense_round(
     moved: np.ndarray,
     nil_speed: float,
     finite: bool,
+    fixed: tuple[np.ndarray, np.ndarray],
 ) -> tuple[float, bool, np.ndarray, np.ndarray]:
     """core.engine.profile._Rounds._dense, move by move: the accelerations ``a`` and their
     ``off``, ``term`` updated in place, this round's ``step`` and ``moved`` written; returns
@@ -612,8 +613,10 @@ def dense_round(
     over every piece of moves where one moved; here only the moves that moved are written:
     the others' are the same values already (``off`` is a != acc and ``term`` the pass
     term of ``a`` wherever they are made, and each term was checked for ``finite`` when it
-    was made)."""
+    was made). ``fixed``: ``acc / jerk`` and ``acc * acc / jerk`` (_Rounds.fixed), the
+    quotients numpy's effective_acceleration makes, made once for all the rounds."""
     n = a.size
+    aj, lim = fixed
     dv = chain_dv(rising, phase, through, v0, v1, peak)
     behind = np.empty(n, dtype=np.int64)
     wanted = np.empty(n)
@@ -625,9 +628,9 @@ def dense_round(
         d, ak, jk = dv[k], acc[k], jerk[k]
         new = ak  # (the quotients only where they are kept)
         if math.isfinite(jk) and d > nil_speed and phase[k]:
-            t_full = d / ak + ak / jk
+            t_full = d / ak + aj[k]
             t_short = math.sqrt(d / jk) * 2.0
-            t = t_full if d >= ak * ak / jk else t_short
+            t = t_full if d >= lim[k] else t_short
             new = d / t
         # the damping
         ls = last[k]
