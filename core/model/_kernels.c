@@ -120,8 +120,8 @@ static void chain_dv(int rising, int64_t n, const uint8_t *phase, const uint8_t 
    moves where one moved; here only the moves that moved are written: the others' are the
    same values already (off is a != acc and term the pass term of a wherever they are
    made, and each term was checked for finite when it was made). work: n doubles (the
-   ramps' speed changes); aj and lim (or NULL): acc / jerk and acc * acc / jerk, which do
-   not change from round to round (the same quotients, made once by numpy). */
+   ramps' speed changes); aj and lim: acc / jerk and acc * acc / jerk, which do not change
+   from round to round (the same quotients, made once by numpy). */
 EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const uint8_t *through,
                            const double *v0, const double *v1, const double *peak, double *a,
                            const int8_t *last, double *term, uint8_t *off, const double *acc,
@@ -140,9 +140,9 @@ EXPORT int64_t dense_round(int rising, int64_t n, const uint8_t *phase, const ui
         double d = dv[k], ak = acc[k], jk = jerk[k];
         double nw = ak;
         if (isfinite(jk) && d > nil_speed && phase[k]) {
-            double t_full = d / ak + (aj ? aj[k] : ak / jk);
+            double t_full = d / ak + aj[k];
             double t_short = sqrt(d / jk) * 2.0;
-            double t = d >= (lim ? lim[k] : ak * ak / jk) ? t_full : t_short;
+            double t = d >= lim[k] ? t_full : t_short;
             nw = d / t;
         }
         /* the damping: the geometric mean where the step turns back */

@@ -123,17 +123,16 @@ class Kernels:
         moved: NDArray,
         nil_speed: float,
         finite: bool,
-        fixed: tuple[NDArray, NDArray] | None = None,
+        fixed: tuple[NDArray, NDArray],
     ) -> tuple[float, bool, NDArray, NDArray]:
         """core.engine.profile._Rounds._dense: as :func:`core.model.compiled.dense_round`
         (``a``, ``off``, ``term`` in place, ``step`` and ``moved`` written; the largest
         relative change, whether the terms are still plain, the moves the damping held
         back and their targets). ``fixed``: ``acc / jerk`` and ``acc * acc / jerk`` made
-        once for all the rounds (else the kernel divides again)."""
+        once for all the rounds (_Rounds.fixed)."""
         f, b = np.float64, np.bool_
         n = a.size
-        cols = [phase, v0, v1, peak, last, term, off, acc, jerk, between, step, moved]
-        cols += [] if fixed is None else list(fixed)
+        cols = [phase, v0, v1, peak, last, term, off, acc, jerk, between, step, moved, *fixed]
         if through.size != n + 1 or any(c.size != n for c in cols):
             raise ValueError("C kernel dense_round: columns of different lengths")
         # (behind and wanted: pages the kernel does not write are never resident)
@@ -149,7 +148,7 @@ class Kernels:
             _ptr(step, np.int8), _ptr(moved, b), nil_speed,
             ctypes.addressof(fin), ctypes.addressof(change),
             _ptr(behind, np.intp), _ptr(wanted, f), _ptr(work, f),
-            *((None, None) if fixed is None else (_ptr(fixed[0], f), _ptr(fixed[1], f))),
+            _ptr(fixed[0], f), _ptr(fixed[1], f),
         )  # fmt: skip
         return change.value, bool(fin.value), behind[:count].copy(), wanted[:count].copy()
 
